@@ -1,0 +1,557 @@
+"""The hot loops: forward kinematics, the Jacobian, the normal equations, PGS.
+
+Plain functions over arrays, compiled by numba when it is installed. The
+public modules (:mod:`gsik.kinematics`, :mod:`gsik.pgs`, :mod:`gsik.solver`)
+check their inputs and call these; nothing here validates anything.
+
+Conventions: ``R`` (n_frames, 3, 3) and ``p`` (n_frames, 3) hold world
+rotations and positions [m]; an effector's 6 rows are 3 position rows then 3
+orientation rows; ``sign[e, d]`` is +1 where DOF ``d`` lies above effector
+``e`` but not above the root, -1 where it lies above the root but not above
+the effector (it turns the other way round seen from the root), else 0.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gsik._jit import njit
+
+# Indices into the settings vector passed to the kernels.
+S_DAMPING, S_SWEEPS, S_RES_TOL, S_UPD_TOL, S_STALL_TOL, S_MAX_STEP, S_ADAPTIVE, S_WARM, S_POS_TOL, S_ORI_TOL = range(10)
+N_SETTINGS = 10
+# Indices into the statistics vector the kernels fill.
+O_SWEEPS, O_RESIDUAL, O_UPDATE, O_COST, O_STEP_NORM, O_ACCEPTED, O_LAMBDA, O_STATUS, O_ITERATIONS = range(9)
+N_STATS = 9
+# Status codes, in the order of gsik.solver.Status.
+CONVERGED, STALLED, BUDGET_EXHAUSTED = 0, 1, 2
+
+
+@njit(cache=True)
+def rotvec_from_matrix(R):
+    """Log map: rotation vector (3,) [rad] of a rotation matrix (3, 3)."""
+    out = np.empty(3)
+    cos = (R[0, 0] + R[1, 1] + R[2, 2] - 1.0) * 0.5
+    cos = min(1.0, max(-1.0, cos))
+    angle = math.acos(cos)
+    wx = R[2, 1] - R[1, 2]
+    wy = R[0, 2] - R[2, 0]
+    wz = R[1, 0] - R[0, 1]
+    if angle < 1e-6:
+        out[0] = 0.5 * wx
+        out[1] = 0.5 * wy
+        out[2] = 0.5 * wz
+        return out
+    if angle > math.pi - 1e-4:
+        # Near pi the antisymmetric part vanishes; the axis comes from (R + I) / 2 = a a^T.
+        i = 0
+        for k in range(1, 3):
+            if R[k, k] > R[i, i]:
+                i = k
+        d = math.sqrt(max(0.5 * (R[i, i] + 1.0), 1e-300))
+        for k in range(3):
+            out[k] = 0.5 * (R[k, i] + R[i, k]) / (2.0 * d) if k != i else d
+        n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2)
+        if out[0] * wx + out[1] * wy + out[2] * wz < 0.0:
+            n = -n
+        for k in range(3):
+            out[k] *= angle / n
+        return out
+    s = angle / (2.0 * math.sin(angle))
+    out[0] = wx * s
+    out[1] = wy * s
+    out[2] = wz * s
+    return out
+
+
+@njit(cache=True)
+def forward_kinematics(parent, offset, rotation, axis, dof, q, root, W, R, p):
+    """World frames into ``R`` (n, 3, 3), ``p`` (n, 3), with frame ``root`` at ``W`` (4, 4).
+
+    A root of -1 leaves the skeleton where its definition puts it.
+    """
+    n = parent.shape[0]
+    L = np.empty((3, 3))
+    for i in range(n):
+        d = dof[i]
+        if d >= 0:
+            ax = axis[i, 0]
+            ay = axis[i, 1]
+            az = axis[i, 2]
+            s = math.sin(q[d])
+            c = math.cos(q[d])
+            t = 1.0 - c
+            # Rodrigues, then the frame's fixed rotation in front of it.
+            r00 = t * ax * ax + c
+            r01 = t * ax * ay - s * az
+            r02 = t * ax * az + s * ay
+            r10 = t * ax * ay + s * az
+            r11 = t * ay * ay + c
+            r12 = t * ay * az - s * ax
+            r20 = t * ax * az - s * ay
+            r21 = t * ay * az + s * ax
+            r22 = t * az * az + c
+            for a in range(3):
+                f0 = rotation[i, a, 0]
+                f1 = rotation[i, a, 1]
+                f2 = rotation[i, a, 2]
+                L[a, 0] = f0 * r00 + f1 * r10 + f2 * r20
+                L[a, 1] = f0 * r01 + f1 * r11 + f2 * r21
+                L[a, 2] = f0 * r02 + f1 * r12 + f2 * r22
+        else:
+            for a in range(3):
+                for b in range(3):
+                    L[a, b] = rotation[i, a, b]
+        k = parent[i]
+        if k < 0:
+            for a in range(3):
+                p[i, a] = offset[i, a]
+                for b in range(3):
+                    R[i, a, b] = L[a, b]
+        else:
+            for a in range(3):
+                p[i, a] = p[k, a] + R[k, a, 0] * offset[i, 0] + R[k, a, 1] * offset[i, 1] + R[k, a, 2] * offset[i, 2]
+                for b in range(3):
+                    R[i, a, b] = R[k, a, 0] * L[0, b] + R[k, a, 1] * L[1, b] + R[k, a, 2] * L[2, b]
+    if root < 0:
+        return
+    # world_from_model = W @ inv(model_from_root), applied to every frame.
+    G = np.empty((3, 3))
+    g = np.empty(3)
+    for a in range(3):
+        for b in range(3):
+            G[a, b] = W[a, 0] * R[root, b, 0] + W[a, 1] * R[root, b, 1] + W[a, 2] * R[root, b, 2]
+    for a in range(3):
+        g[a] = W[a, 3] - (G[a, 0] * p[root, 0] + G[a, 1] * p[root, 1] + G[a, 2] * p[root, 2])
+    for i in range(n):
+        px = p[i, 0]
+        py = p[i, 1]
+        pz = p[i, 2]
+        for a in range(3):
+            p[i, a] = g[a] + G[a, 0] * px + G[a, 1] * py + G[a, 2] * pz
+        for b in range(3):
+            c0 = R[i, 0, b]
+            c1 = R[i, 1, b]
+            c2 = R[i, 2, b]
+            for a in range(3):
+                R[i, a, b] = G[a, 0] * c0 + G[a, 1] * c1 + G[a, 2] * c2
+
+
+@njit(cache=True)
+def effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err):
+    """Error vector ``e`` (6m,) (target minus current) and per-effector errors ``err`` (m, 2).
+
+    Returns the weighted cost ``0.5 * sum(row_w * e**2)``. ``err[k]`` holds
+    the position error [m] and orientation error [rad].
+    """
+    m = eff_frame.shape[0]
+    cost = 0.0
+    M = np.empty((3, 3))
+    for k in range(m):
+        f = eff_frame[k]
+        for a in range(3):
+            e[6 * k + a] = target_p[k, a] - p[f, a]
+        # Orientation error: log(target @ current^T), a world-frame rotation vector.
+        for a in range(3):
+            for b in range(3):
+                M[a, b] = target_R[k, a, 0] * R[f, b, 0] + target_R[k, a, 1] * R[f, b, 1] + target_R[k, a, 2] * R[f, b, 2]
+        w = rotvec_from_matrix(M)
+        for a in range(3):
+            e[6 * k + 3 + a] = w[a]
+        ep = math.sqrt(e[6 * k] ** 2 + e[6 * k + 1] ** 2 + e[6 * k + 2] ** 2)
+        eo = math.sqrt(w[0] ** 2 + w[1] ** 2 + w[2] ** 2)
+        err[k, 0] = ep
+        err[k, 1] = eo
+        for r in range(6):
+            cost += 0.5 * row_w[k, r] * e[6 * k + r] ** 2
+    return cost
+
+
+@njit(cache=True)
+def jacobian(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, J):
+    """Fill ``J`` (6m, n_dofs): ``+-[r_d x (e - p_d); r_d]`` where DOF ``d`` moves effector ``e``.
+
+    ``r_d`` is the DOF's world axis and ``p_d`` its world position.
+    """
+    J[:, :] = 0.0
+    m = eff_frame.shape[0]
+    for k in range(m):
+        f = eff_frame[k]
+        for t in range(eff_n[k]):
+            d = eff_dofs[k, t]
+            g = dof_frame[d]
+            s = sign[k, d]
+            rx = R[g, 0, 0] * axis[g, 0] + R[g, 0, 1] * axis[g, 1] + R[g, 0, 2] * axis[g, 2]
+            ry = R[g, 1, 0] * axis[g, 0] + R[g, 1, 1] * axis[g, 1] + R[g, 1, 2] * axis[g, 2]
+            rz = R[g, 2, 0] * axis[g, 0] + R[g, 2, 1] * axis[g, 1] + R[g, 2, 2] * axis[g, 2]
+            dx = p[f, 0] - p[g, 0]
+            dy = p[f, 1] - p[g, 1]
+            dz = p[f, 2] - p[g, 2]
+            J[6 * k + 0, d] = s * (ry * dz - rz * dy)
+            J[6 * k + 1, d] = s * (rz * dx - rx * dz)
+            J[6 * k + 2, d] = s * (rx * dy - ry * dx)
+            J[6 * k + 3, d] = s * rx
+            J[6 * k + 4, d] = s * ry
+            J[6 * k + 5, d] = s * rz
+
+
+@njit(cache=True)
+def normal_equations(J, e, row_w, eff_dofs, eff_n, A, b):
+    """``A = J^T W J`` and ``b = J^T W e``, touching only the DOFs each effector depends on."""
+    A[:, :] = 0.0
+    b[:] = 0.0
+    m = eff_dofs.shape[0]
+    wj = np.empty((6, J.shape[1]))
+    for k in range(m):
+        n_k = eff_n[k]
+        for t in range(n_k):
+            d = eff_dofs[k, t]
+            acc = 0.0
+            for r in range(6):
+                v = row_w[k, r] * J[6 * k + r, d]
+                wj[r, d] = v
+                acc += v * e[6 * k + r]
+            b[d] += acc
+        for t in range(n_k):
+            d1 = eff_dofs[k, t]
+            for u in range(t, n_k):
+                d2 = eff_dofs[k, u]
+                acc = 0.0
+                for r in range(6):
+                    acc += wj[r, d1] * J[6 * k + r, d2]
+                A[d1, d2] += acc
+                if d1 != d2:
+                    A[d2, d1] += acc
+
+
+@njit(cache=True)
+def projected_gauss_seidel(A, b, x, lo, hi, sweeps, res_tol, upd_tol, x_prev, stall_tol, stats):
+    """Projected Gauss-Seidel on ``A x = b`` with ``lo <= x <= hi``, in place on ``x``.
+
+    Stops at the first of the paper's four tests: ``sweeps`` done; the
+    projected residual ``|b - A x|`` below ``res_tol``; the sweep's change
+    ``|dx|`` below ``upd_tol``; ``|x - x_prev|`` (the previous frame's
+    solution) below ``stall_tol``. A tolerance <= 0 disables its test.
+    Writes sweeps, residual and last change into ``stats``.
+    """
+    n = b.shape[0]
+    res = 0.0
+    upd = 0.0
+    it = 0
+    for it in range(1, sweeps + 1):
+        res2 = 0.0
+        upd2 = 0.0
+        for i in range(n):
+            r = b[i]
+            for j in range(n):
+                r -= A[i, j] * x[j]
+            xi = x[i] + r / A[i, i]
+            if xi < lo[i]:
+                xi = lo[i]
+            elif xi > hi[i]:
+                xi = hi[i]
+            # A component held at a bound by a residual pushing outward satisfies its KKT condition.
+            if not ((xi <= lo[i] and r < 0.0) or (xi >= hi[i] and r > 0.0)):
+                res2 += r * r
+            dx = xi - x[i]
+            upd2 += dx * dx
+            x[i] = xi
+        res = math.sqrt(res2)
+        upd = math.sqrt(upd2)
+        if res < res_tol or upd < upd_tol:
+            break
+        if stall_tol > 0.0:
+            d2 = 0.0
+            for i in range(n):
+                d2 += (x[i] - x_prev[i]) ** 2
+            if math.sqrt(d2) < stall_tol:
+                break
+    stats[O_SWEEPS] = it
+    stats[O_RESIDUAL] = res
+    stats[O_UPDATE] = upd
+
+
+@njit(cache=True)
+def _finish_errors(row_w, err, pos_tol, ori_tol):
+    """Zero the errors of unused rows (no target, position only); True if all are within tolerance."""
+    ok = True
+    for k in range(err.shape[0]):
+        if row_w[k, 0] <= 0.0:
+            err[k, 0] = 0.0
+        elif err[k, 0] > pos_tol:
+            ok = False
+        if row_w[k, 3] <= 0.0:
+            err[k, 1] = 0.0
+        elif err[k, 1] > ori_tol:
+            ok = False
+    return ok
+
+
+@njit(cache=True)
+def _bounds(q, lower, upper, max_step, lo, hi):
+    for i in range(q.shape[0]):
+        lo[i] = lower[i] - q[i]
+        hi[i] = upper[i] - q[i]
+        if max_step > 0.0:
+            lo[i] = max(lo[i], -max_step)
+            hi[i] = min(hi[i], max_step)
+        # Rounding can leave q a hair outside its limits; never ask PGS for an empty box.
+        if lo[i] > 0.0:
+            lo[i] = 0.0
+        if hi[i] < 0.0:
+            hi[i] = 0.0
+
+
+@njit(cache=True)
+def _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err):
+    parent, offset, rotation, axis, dof, dof_frame, lower, upper, eff_frame, sign, eff_dofs, eff_n = model
+    forward_kinematics(parent, offset, rotation, axis, dof, q, root, W, R, p)
+    return effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err)
+
+
+@njit(cache=True)
+def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R, p, err, stats):
+    """One frame: linearise at ``q``, solve the damped normal equations by PGS, update ``q``.
+
+    ``R``, ``p`` must hold the world frames at the incoming ``q``; on return
+    they hold the frames at the new ``q`` and ``err`` (m, 2) its errors.
+    ``x`` (n_dofs,) carries the previous frame's step in (the warm start) and
+    this frame's step out. ``lam_state`` (1,) is the adaptive damping carried
+    between frames.
+    """
+    parent, offset, rotation, axis, dof, dof_frame, lower, upper, eff_frame, sign, eff_dofs, eff_n = model
+    n = q.shape[0]
+    m = eff_frame.shape[0]
+    damping = settings[S_DAMPING]
+    adaptive = settings[S_ADAPTIVE] > 0.0
+    e = np.empty(6 * m)
+    cost0 = effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err)
+    J = np.empty((6 * m, n))
+    jacobian(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, J)
+    A = np.empty((n, n))
+    b = np.empty(n)
+    normal_equations(J, e, row_w, eff_dofs, eff_n, A, b)
+    lam = lam_state[0] if adaptive else damping
+    for i in range(n):
+        A[i, i] += lam
+    lo = np.empty(n)
+    hi = np.empty(n)
+    _bounds(q, lower, upper, settings[S_MAX_STEP], lo, hi)
+    x_prev = x.copy()
+    if settings[S_WARM] > 0.0:
+        for i in range(n):
+            x[i] = min(max(x[i], lo[i]), hi[i])
+    else:
+        x[:] = 0.0
+    projected_gauss_seidel(A, b, x, lo, hi, int(settings[S_SWEEPS]), settings[S_RES_TOL], settings[S_UPD_TOL],
+                           x_prev, settings[S_STALL_TOL], stats)
+    q_new = q + x
+    R2 = np.empty_like(R)
+    p2 = np.empty_like(p)
+    err2 = np.empty_like(err)
+    cost = _evaluate(model, q_new, root, W, target_p, target_R, row_w, R2, p2, e, err2)
+    accepted = 1.0
+    if adaptive:
+        # Levenberg-style safeguard: a step that raises the error is halved, then refused,
+        # and the damping grows; so a held target can only settle, never oscillate.
+        tries = 0
+        while cost > cost0 and tries < 3:
+            for i in range(n):
+                x[i] *= 0.5
+                q_new[i] = q[i] + x[i]
+            cost = _evaluate(model, q_new, root, W, target_p, target_R, row_w, R2, p2, e, err2)
+            tries += 1
+        if cost > cost0:
+            accepted = 0.0
+            x[:] = 0.0
+            lam_state[0] = min(lam * 10.0, 1e6)
+            cost = cost0
+        else:
+            lam_state[0] = max(lam * (0.5 if tries == 0 else 4.0), damping)
+    if accepted > 0.0:
+        for i in range(n):
+            q[i] = q_new[i]
+        R[:, :, :] = R2
+        p[:, :] = p2
+        err[:, :] = err2
+    step_norm = math.sqrt(np.sum(x * x))
+    stats[O_COST] = cost
+    stats[O_STEP_NORM] = step_norm
+    stats[O_ACCEPTED] = accepted
+    stats[O_LAMBDA] = lam
+    stats[O_ITERATIONS] = stats[O_SWEEPS]
+    if _finish_errors(row_w, err, settings[S_POS_TOL], settings[S_ORI_TOL]):
+        stats[O_STATUS] = CONVERGED
+    elif accepted == 0.0 or step_norm <= max(settings[S_STALL_TOL], 1e-12) * 1e3:
+        stats[O_STATUS] = STALLED
+    else:
+        stats[O_STATUS] = BUDGET_EXHAUSTED
+
+
+@njit(cache=True)
+def _cholesky_solve(M, r, nf):
+    """Solve ``M[:nf, :nf] y = r[:nf]`` in place in ``r`` (M SPD; overwritten). False if not SPD."""
+    for j in range(nf):
+        d = M[j, j]
+        for k in range(j):
+            d -= M[j, k] * M[j, k]
+        if d <= 0.0:
+            return False
+        d = math.sqrt(d)
+        M[j, j] = d
+        for i in range(j + 1, nf):
+            v = M[i, j]
+            for k in range(j):
+                v -= M[i, k] * M[j, k]
+            M[i, j] = v / d
+    for i in range(nf):
+        v = r[i]
+        for k in range(i):
+            v -= M[i, k] * r[k]
+        r[i] = v / M[i, i]
+    for i in range(nf - 1, -1, -1):
+        v = r[i]
+        for k in range(i + 1, nf):
+            v -= M[k, i] * r[k]
+        r[i] = v / M[i, i]
+    return True
+
+
+@njit(cache=True)
+def bounded_solve(A, b, x, lo, hi, sweeps, stats):
+    """Minimise ``0.5 x^T A x - b^T x`` with ``lo <= x <= hi``: PGS with subspace minimisation.
+
+    PGS sweeps find which unknowns sit on a bound; the others (the free set)
+    are then solved exactly by Cholesky and projected back into the box,
+    a few rounds, and a last PGS pass settles the bounds. Plain PGS needs
+    thousands of sweeps on the ill-conditioned systems near a solution;
+    this reaches the exact bounded minimiser in a few rounds.
+    """
+    n = b.shape[0]
+    projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)
+    total = int(stats[O_SWEEPS])
+    free = np.empty(n, dtype=np.int64)
+    is_free = np.zeros(n, dtype=np.bool_)
+    M = np.empty((n, n))
+    r = np.empty(n)
+    for _ in range(8):
+        nf = 0
+        for i in range(n):
+            g = -b[i]
+            for j in range(n):
+                g += A[i, j] * x[j]
+            if (x[i] > lo[i] and x[i] < hi[i]) or (x[i] <= lo[i] and g < 0.0) or (x[i] >= hi[i] and g > 0.0):
+                free[nf] = i
+                nf += 1
+        if nf == 0:
+            break
+        is_free[:] = False
+        for a in range(nf):
+            is_free[free[a]] = True
+        for a in range(nf):
+            i = free[a]
+            v = b[i]
+            for j in range(n):
+                if not is_free[j]:
+                    v -= A[i, j] * x[j]
+            r[a] = v
+            for c in range(nf):
+                M[a, c] = A[i, free[c]]
+        if not _cholesky_solve(M, r, nf):
+            break
+        inside = True
+        for a in range(nf):
+            i = free[a]
+            v = r[a]
+            if v < lo[i]:
+                v = lo[i]
+                inside = False
+            elif v > hi[i]:
+                v = hi[i]
+                inside = False
+            x[i] = v
+        if inside:
+            break
+    projected_gauss_seidel(A, b, x, lo, hi, 3, 0.0, 0.0, x, 0.0, stats)
+    stats[O_SWEEPS] = total + int(stats[O_SWEEPS])
+
+
+@njit(cache=True)
+def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations, R, p, err, stats):
+    """Levenberg-Marquardt over bounded steps until the targets are met or progress stops.
+
+    Each iteration linearises, solves ``(J^T W J + lam I) x = J^T W e`` within
+    the limits (:func:`bounded_solve`), and keeps the step only if the
+    weighted error falls; else ``lam`` grows and it tries again. Sets
+    ``stats[O_STATUS]`` (converged; stalled: no step lowers the error or the
+    pose stopped changing, a best reach; budget exhausted),
+    ``stats[O_ITERATIONS]``, ``stats[O_SWEEPS]`` and ``stats[O_COST]``.
+    """
+    parent, offset, rotation, axis, dof, dof_frame, lower, upper, eff_frame, sign, eff_dofs, eff_n = model
+    n = q.shape[0]
+    m = eff_frame.shape[0]
+    e = np.empty(6 * m)
+    J = np.empty((6 * m, n))
+    A = np.empty((n, n))
+    Al = np.empty((n, n))
+    b = np.empty(n)
+    lo = np.empty(n)
+    hi = np.empty(n)
+    x = np.zeros(n)
+    q_try = np.empty(n)
+    R2 = np.empty_like(R)
+    p2 = np.empty_like(p)
+    err2 = np.empty_like(err)
+    pgs_stats = np.zeros(N_STATS)
+    damping = settings[S_DAMPING]
+    pos_tol = settings[S_POS_TOL]
+    ori_tol = settings[S_ORI_TOL]
+    lam = max(damping, 1e-3)
+    sweeps = int(settings[S_SWEEPS])
+    cost = _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err)
+    total_sweeps = 0
+    status = BUDGET_EXHAUSTED
+    it = 0
+    for it in range(max_iterations + 1):
+        err2[:, :] = err
+        if _finish_errors(row_w, err2, pos_tol, ori_tol):
+            status = CONVERGED
+            break
+        if it == max_iterations:
+            break
+        jacobian(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, J)
+        normal_equations(J, e, row_w, eff_dofs, eff_n, A, b)
+        _bounds(q, lower, upper, settings[S_MAX_STEP], lo, hi)
+        accepted = False
+        while lam < 1e8:
+            Al[:, :] = A
+            for i in range(n):
+                Al[i, i] += lam
+            x[:] = 0.0
+            bounded_solve(Al, b, x, lo, hi, sweeps, pgs_stats)
+            total_sweeps += int(pgs_stats[O_SWEEPS])
+            for i in range(n):
+                q_try[i] = q[i] + x[i]
+            c = _evaluate(model, q_try, root, W, target_p, target_R, row_w, R2, p2, e, err2)
+            if c < cost:
+                accepted = True
+                cost = c
+                q[:] = q_try
+                R[:, :, :] = R2
+                p[:, :] = p2
+                err[:, :] = err2
+                lam = max(lam * 0.3, 1e-9)
+                break
+            lam *= 5.0
+        if not accepted or math.sqrt(np.sum(x * x)) < settings[S_STALL_TOL]:
+            status = STALLED
+            break
+    # e and err must describe the final q (a refused trial overwrote them).
+    cost = _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err)
+    _finish_errors(row_w, err, pos_tol, ori_tol)
+    stats[O_STATUS] = status
+    stats[O_ITERATIONS] = it
+    stats[O_SWEEPS] = total_sweeps
+    stats[O_COST] = cost

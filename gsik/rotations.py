@@ -1,0 +1,104 @@
+"""Rotation conversions on plain NumPy arrays.
+
+Names follow ``x_from_y``. Quaternions are ``(w, x, y, z)``, unit norm.
+Rotation vectors are axis * angle ``[rad]``. Batch forms accept leading
+dimensions: ``(..., 3, 3)``, ``(..., 4)``, ``(..., 3)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Largest deviation from orthonormality accepted as a rotation matrix.
+ROTATION_TOLERANCE = 1e-6
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """The cross-product matrix ``[v]x`` of a 3-vector: ``skew(a) @ b == cross(a, b)``."""
+    x, y, z = v
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def matrix_from_axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation matrix (3, 3) turning ``angle`` [rad] about the unit ``axis`` (3,)."""
+    k = skew(np.asarray(axis, dtype=float))
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+
+
+def matrix_from_rotvec(rotvec: np.ndarray) -> np.ndarray:
+    """Rotation matrix (3, 3) of a rotation vector (3,) [rad] (the exp map)."""
+    rotvec = np.asarray(rotvec, dtype=float)
+    angle = float(np.linalg.norm(rotvec))
+    if angle < 1e-12:
+        return np.eye(3) + skew(rotvec)
+    return matrix_from_axis_angle(rotvec / angle, angle)
+
+
+def rotvec_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Rotation vector (3,) [rad] of a rotation matrix (3, 3) (the log map).
+
+    Accurate over the whole range, including angles near pi where the
+    antisymmetric part vanishes.
+    """
+    from gsik._kernels import rotvec_from_matrix as log_map
+
+    return log_map(np.ascontiguousarray(R, dtype=float))
+
+
+def matrix_from_quaternion(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix (..., 3, 3) of unit quaternions (..., 4) ``(w, x, y, z)``."""
+    q = np.asarray(q, dtype=float)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    R = np.empty(q.shape[:-1] + (3, 3))
+    R[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    R[..., 0, 1] = 2 * (x * y - z * w)
+    R[..., 0, 2] = 2 * (x * z + y * w)
+    R[..., 1, 0] = 2 * (x * y + z * w)
+    R[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    R[..., 1, 2] = 2 * (y * z - x * w)
+    R[..., 2, 0] = 2 * (x * z - y * w)
+    R[..., 2, 1] = 2 * (y * z + x * w)
+    R[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return R
+
+
+def quaternion_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (4,) ``(w, x, y, z)`` with ``w >= 0`` of a rotation matrix (3, 3)."""
+    R = np.asarray(R, dtype=float)
+    t = np.trace(R)
+    if t > 0.0:
+        s = 2.0 * np.sqrt(t + 1.0)
+        q = np.array([0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s])
+    else:
+        i = int(np.argmax(np.diag(R)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * np.sqrt(max(1.0 + R[i, i] - R[j, j] - R[k, k], 1e-300))
+        q = np.empty(4)
+        q[0] = (R[k, j] - R[j, k]) / s
+        q[1 + i] = 0.25 * s
+        q[1 + j] = (R[j, i] + R[i, j]) / s
+        q[1 + k] = (R[k, i] + R[i, k]) / s
+    q /= np.linalg.norm(q)
+    return -q if q[0] < 0.0 else q
+
+
+def is_rotation_matrix(R: np.ndarray, tolerance: float = ROTATION_TOLERANCE) -> bool:
+    """True if ``R`` is a finite (3, 3) orthonormal matrix with determinant +1."""
+    R = np.asarray(R)
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        return False
+    return bool(np.abs(R.T @ R - np.eye(3)).max() <= tolerance and np.linalg.det(R) > 0.0)
+
+
+def angle_between(R_a: np.ndarray, R_b: np.ndarray) -> float:
+    """Angle [rad] of the rotation taking ``R_b`` to ``R_a`` (0 to pi)."""
+    cos = (np.trace(np.asarray(R_a).T @ np.asarray(R_b)) - 1.0) * 0.5
+    return float(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def transform(R: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Homogeneous transform (4, 4) from a rotation (3, 3) and a translation (3,)."""
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T

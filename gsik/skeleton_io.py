@@ -1,0 +1,220 @@
+"""Reading skeleton definitions from YAML (schema: ``skeletons/README.md``)."""
+
+from __future__ import annotations
+
+import os
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from gsik.errors import SkeletonError, choices
+from gsik.rotations import matrix_from_quaternion
+from gsik.skeleton import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
+
+FORMAT_VERSION = 1
+
+
+def _bundled_dir() -> Path:
+    """The folder of the bundled skeletons: installed as ``gsik.skeletons``, or the repository's ``skeletons/``."""
+    try:
+        d = Path(str(resources.files("gsik.skeletons")))
+        if d.is_dir():
+            return d
+    except ModuleNotFoundError:
+        pass
+    return Path(__file__).resolve().parent.parent / "skeletons"
+
+
+def bundled_skeletons() -> tuple[str, ...]:
+    """Names of the skeletons shipped with gsik (``"biped"``, ...)."""
+    return tuple(sorted(p.stem for p in _bundled_dir().glob("*.yaml")))
+
+
+def load_skeleton(name_or_path: str | os.PathLike) -> Skeleton:
+    """Load a bundled skeleton by name (``"biped"``) or a skeleton YAML file by path.
+
+    Raises:
+        SkeletonError: unknown bundled name (listing the valid ones), a file
+            that cannot be read, malformed YAML, or an invalid definition;
+            the message names the file, the field and the bad value.
+    """
+    s = os.fspath(name_or_path)
+    path = Path(s)
+    if not (path.suffix in (".yaml", ".yml") or os.sep in s or path.exists()):
+        bundled = bundled_skeletons()
+        if s not in bundled:
+            raise SkeletonError(f"no bundled skeleton {s!r}; bundled: {choices(bundled)} (or give a path to a .yaml file)")
+        path = _bundled_dir() / f"{s}.yaml"
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise SkeletonError(f"cannot read skeleton file {str(path)!r}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise SkeletonError(f"{path}: not a UTF-8 text file ({exc.reason})") from None
+    return skeleton_from_yaml(text, source=str(path))
+
+
+def skeleton_from_yaml(text: str, source: str = "<string>") -> Skeleton:
+    """Parse and compile a skeleton from YAML text."""
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise SkeletonError(f"{source}: malformed YAML{where}: {problem}") from None
+    return skeleton_from_dict(data, source)
+
+
+class _Fields:
+    """Reads one mapping of a YAML document, naming the place in every error."""
+
+    def __init__(self, data, where: str, source: str):
+        self.where = where
+        self.source = source
+        if not isinstance(data, dict):
+            self.fail(f"must be a mapping, got {type(data).__name__}")
+        self.data = data
+
+    def fail(self, msg: str):
+        raise SkeletonError(f"{self.source}: {self.where}: {msg}")
+
+    def check_keys(self, allowed: tuple[str, ...]) -> None:
+        unknown = [k for k in self.data if k not in allowed]
+        if unknown:
+            self.fail(f"unknown field {unknown[0]!r}; valid fields: {choices(allowed)}")
+
+    def get(self, key: str, default=...):
+        if key not in self.data:
+            if default is ...:
+                self.fail(f"missing field {key!r}")
+            return default
+        return self.data[key]
+
+    def name(self, key: str = "name", default=...) -> str | None:
+        v = self.get(key, default)
+        if v is None and default is None:
+            return None
+        if not isinstance(v, str) or not v.strip():
+            self.fail(f"{key} must be a non-empty string, got {v!r}")
+        return v
+
+    def number(self, value, what: str) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(f"{what} must be a number, got {value!r}")
+        if not np.isfinite(value):
+            self.fail(f"{what} must be finite, got {value!r}")
+        return float(value)
+
+    def vector(self, key: str, n: int = 3, default=...) -> tuple[float, ...]:
+        v = self.get(key, default)
+        if v is default and default is not ...:
+            return default
+        if not isinstance(v, (list, tuple)) or len(v) != n:
+            self.fail(f"{key} must be a list of {n} numbers, got {v!r}")
+        return tuple(self.number(x, f"{key}[{i}]") for i, x in enumerate(v))
+
+    def orientation(self, key: str = "orientation"):
+        q = self.vector(key, 4, default=None)
+        if q is None:
+            return None
+        norm = float(np.linalg.norm(q))
+        if abs(norm - 1.0) > 1e-3:
+            self.fail(f"{key} must be a unit quaternion [w, x, y, z], got norm {norm:.6g}")
+        return matrix_from_quaternion(np.asarray(q) / norm)
+
+
+def _axis(f: _Fields, value) -> tuple[float, float, float]:
+    if isinstance(value, str):
+        v = value.strip().lower()
+        sign = -1.0 if v.startswith("-") else 1.0
+        v = v.lstrip("+-")
+        if v not in AXES:
+            f.fail(f"axis must be x, y, z (optionally with a sign) or 3 numbers, got {value!r}")
+        return tuple(sign * c for c in AXES[v])
+    if isinstance(value, (list, tuple)) and len(value) == 3:
+        return tuple(f.number(c, "axis") for c in value)
+    f.fail(f"axis must be x, y, z (optionally with a sign) or 3 numbers, got {value!r}")
+
+
+def _rotation(f: _Fields, data, k: int) -> RotationSpec:
+    r = _Fields(data, f"{f.where}: rotations[{k}]", f.source)
+    r.check_keys(("axis", "limits", "rest", "label"))
+    raw_axis = r.get("axis")
+    axis = _axis(r, raw_axis)
+    limits = r.get("limits")
+    if not isinstance(limits, (list, tuple)) or len(limits) != 2:
+        r.fail(f"limits must be [lower, upper] in rad, got {limits!r}")
+    lo, hi = (r.number(x, f"limits[{i}]") for i, x in enumerate(limits))
+    if lo > hi:
+        r.fail(f"lower limit {lo} is above upper limit {hi}")
+    rest = r.number(r.get("rest", 0.0), "rest")
+    if not lo <= rest <= hi:
+        r.fail(f"rest angle {rest} is outside the limits [{lo}, {hi}]")
+    label = r.get("label", None)
+    if label is None and isinstance(raw_axis, str):
+        label = raw_axis.strip().lower().lstrip("+-")
+    return RotationSpec(axis, lo, hi, rest, label or "")
+
+
+def skeleton_from_dict(data, source: str = "<memory>") -> Skeleton:
+    """Validate a parsed YAML document and compile it into a :class:`Skeleton`."""
+    top = _Fields(data, "top level", source)
+    top.check_keys(("format", "name", "description", "units", "up", "root", "effectors", "joints", "sites", "segments"))
+    version = top.get("format", FORMAT_VERSION)
+    if version != FORMAT_VERSION:
+        top.fail(f"format {version!r} is not supported; this gsik reads format {FORMAT_VERSION}")
+    if top.get("units", "m") != "m":
+        top.fail(f"units must be 'm' (metres), got {top.get('units')!r}")
+    name = top.name("name")
+
+    joints_data = top.get("joints")
+    if not isinstance(joints_data, list) or not joints_data:
+        top.fail(f"joints must be a non-empty list, got {joints_data!r}")
+    joints = []
+    for i, jd in enumerate(joints_data):
+        f = _Fields(jd, f"joints[{i}]", source)
+        jname = f.name()
+        f.where = f"joints[{i}] ({jname})"
+        f.check_keys(("name", "parent", "offset", "rotations", "orientation"))
+        rots = f.get("rotations", [])
+        if not isinstance(rots, list):
+            f.fail(f"rotations must be a list, got {rots!r}")
+        joints.append(JointSpec(
+            name=jname,
+            parent=f.name("parent", None),
+            offset=f.vector("offset", default=(0.0, 0.0, 0.0)),
+            rotations=tuple(_rotation(f, r, k) for k, r in enumerate(rots)),
+            orientation=f.orientation(),
+        ))
+
+    sites = []
+    for i, sd in enumerate(_list(top, "sites")):
+        f = _Fields(sd, f"sites[{i}]", source)
+        f.check_keys(("name", "parent", "offset", "orientation"))
+        sites.append(SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)),
+                              f.orientation()))
+    segments = []
+    for i, sd in enumerate(_list(top, "segments")):
+        f = _Fields(sd, f"segments[{i}]", source)
+        f.check_keys(("name", "from", "to"))
+        to = f.get("to")
+        ends = [to] if isinstance(to, str) else to
+        if not isinstance(ends, list) or not ends or not all(isinstance(e, str) and e for e in ends):
+            f.fail(f"to must be a joint or site name or a list of them, got {to!r}")
+        segments.append(SegmentSpec(f.name(), f.name("from"), tuple(ends)))
+    effectors = _list(top, "effectors")
+    for e in effectors:
+        if not isinstance(e, str):
+            top.fail(f"effectors must be a list of site names, got {e!r}")
+    root = top.name("root", None)
+    return build_skeleton(name, joints, sites, segments, effectors, root, source)
+
+
+def _list(top: _Fields, key: str) -> list:
+    v = top.get(key, [])
+    if not isinstance(v, list):
+        top.fail(f"{key} must be a list, got {v!r}")
+    return v

@@ -1,0 +1,473 @@
+"""URDF robot descriptions: parse the kinematic tree (links and joints).
+
+This is the file-format layer only: it reads ``<link>`` names and
+``<joint>`` elements (type, parent, child, origin, axis, limits) into plain,
+read-only data and checks that they form one tree. Visuals, collisions,
+inertials, transmissions and other elements are ignored.
+
+Malformed input raises :class:`~gsik.errors.UrdfError` naming the element
+and the offending value (and the XML parser's line number for broken XML).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from gsik.errors import GsikFileError, UrdfError, choices
+
+#: Joint types this module parses (prismatic is parsed; conversion may reject it).
+JOINT_TYPES = ("revolute", "continuous", "fixed", "prismatic")
+# Valid URDF, but with more than one DOF: named separately in the error message.
+_UNSUPPORTED_TYPES = ("floating", "planar")
+_LIMITED_TYPES = ("revolute", "prismatic")
+
+_NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def _frozen_vector(v, what: str) -> np.ndarray:
+    a = np.array(v, dtype=float)
+    if a.shape != (3,):
+        raise UrdfError(f"{what} must have shape (3,), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise UrdfError(f"{what} {a.tolist()} is not finite")
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class UrdfJoint:
+    """One ``<joint>`` element.
+
+    Attributes:
+        name: Joint name.
+        type: ``"revolute"``, ``"continuous"``, ``"fixed"`` or ``"prismatic"``.
+        parent: Parent link name.
+        child: Child link name.
+        origin_xyz: (3,) child frame position in the parent link frame [m].
+        origin_rpy: (3,) fixed roll, pitch, yaw [rad] of the child frame
+            (see :func:`matrix_from_rpy`).
+        axis: (3,) unit axis in the joint (child) frame; ``(1, 0, 0)`` when
+            the file has none.
+        lower: Lower limit ([rad], or [m] for prismatic); ``None`` for
+            continuous and fixed joints.
+        upper: Upper limit, like ``lower``.
+    """
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    origin_xyz: np.ndarray
+    origin_rpy: np.ndarray
+    axis: np.ndarray
+    lower: float | None = None
+    upper: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.type not in JOINT_TYPES:
+            raise UrdfError(f"joint {self.name!r}: unknown type {self.type!r}; expected one of {choices(JOINT_TYPES)}")
+        object.__setattr__(self, "origin_xyz", _frozen_vector(self.origin_xyz, f"joint {self.name!r} origin_xyz"))
+        object.__setattr__(self, "origin_rpy", _frozen_vector(self.origin_rpy, f"joint {self.name!r} origin_rpy"))
+        axis = _frozen_vector(self.axis, f"joint {self.name!r} axis")
+        norm = float(np.linalg.norm(axis))
+        if norm == 0.0:
+            raise UrdfError(f"joint {self.name!r}: axis is zero")
+        if abs(norm - 1.0) > 1e-12:
+            axis = _frozen_vector(axis / norm, f"joint {self.name!r} axis")
+        object.__setattr__(self, "axis", axis)
+        for attr in ("lower", "upper"):
+            value = getattr(self, attr)
+            if value is not None:
+                value = float(value)
+                if not np.isfinite(value):
+                    raise UrdfError(f"joint {self.name!r}: {attr} limit {value} is not finite")
+                object.__setattr__(self, attr, value)
+        if self.lower is not None and self.upper is not None and self.lower > self.upper:
+            raise UrdfError(f"joint {self.name!r}: lower limit {self.lower} > upper limit {self.upper}")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, UrdfJoint):
+            return NotImplemented
+        return (
+            (self.name, self.type, self.parent, self.child, self.lower, self.upper)
+            == (other.name, other.type, other.parent, other.child, other.lower, other.upper)
+            and np.array_equal(self.origin_xyz, other.origin_xyz)
+            and np.array_equal(self.origin_rpy, other.origin_rpy)
+            and np.array_equal(self.axis, other.axis)
+        )
+
+    __hash__ = None  # type: ignore[assignment]  # holds arrays
+
+    @property
+    def origin_rotation(self) -> np.ndarray:
+        """(3, 3) fixed rotation of the child frame in the parent link frame."""
+        return matrix_from_rpy(self.origin_rpy)
+
+
+@dataclass(frozen=True, eq=False)
+class UrdfRobot:
+    """The kinematic tree of a URDF robot.
+
+    Attributes:
+        name: The ``<robot name>`` (empty if absent).
+        links: Link names in file order.
+        joints: Joints in file order (see :meth:`joints_in_tree_order`).
+        root_link: The one link that is no joint's child.
+    """
+
+    name: str
+    links: tuple[str, ...]
+    joints: tuple[UrdfJoint, ...]
+    root_link: str
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "links", tuple(self.links))
+        object.__setattr__(self, "joints", tuple(self.joints))
+        root = _check_tree(self.links, self.joints)
+        if root != self.root_link:
+            raise UrdfError(f"root_link is {self.root_link!r} but the tree's root is {root!r}")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, UrdfRobot):
+            return NotImplemented
+        return (self.name, self.links, self.joints, self.root_link) == (
+            other.name,
+            other.links,
+            other.joints,
+            other.root_link,
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    @cached_property
+    def _by_name(self) -> dict[str, UrdfJoint]:
+        return {j.name: j for j in self.joints}
+
+    @cached_property
+    def _by_child(self) -> dict[str, UrdfJoint]:
+        return {j.child: j for j in self.joints}
+
+    def joint(self, name: str) -> UrdfJoint:
+        """The joint called ``name``."""
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise UrdfError(f"robot {self.name!r} has no joint {name!r}; joints: {choices(self._by_name)}") from None
+
+    def parent_joint(self, link: str) -> UrdfJoint | None:
+        """The joint whose child is ``link``; ``None`` for the root link."""
+        if link not in self.links:
+            raise UrdfError(f"robot {self.name!r} has no link {link!r}; links: {choices(self.links)}")
+        return self._by_child.get(link)
+
+    def child_joints(self, link: str) -> tuple[UrdfJoint, ...]:
+        """Joints whose parent is ``link``, in file order."""
+        return tuple(j for j in self.joints if j.parent == link)
+
+    def joints_in_tree_order(self) -> tuple[UrdfJoint, ...]:
+        """All joints depth-first from the root link (parent before child, siblings in file order)."""
+        return tuple(_preorder(self.root_link, self.child_joints))
+
+
+def _preorder(root: str, child_joints) -> list[UrdfJoint]:
+    out: list[UrdfJoint] = []
+    stack = list(reversed(child_joints(root)))
+    while stack:
+        joint = stack.pop()
+        out.append(joint)
+        stack.extend(reversed(child_joints(joint.child)))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Rotations
+# ---------------------------------------------------------------------------
+
+
+def matrix_from_rpy(rpy) -> np.ndarray:
+    """Rotation matrix of URDF roll, pitch, yaw: ``R = Rz(yaw) @ Ry(pitch) @ Rx(roll)``.
+
+    Args:
+        rpy: (..., 3) roll, pitch, yaw [rad] (fixed axes X, then Y, then Z).
+
+    Returns:
+        (..., 3, 3) rotation matrices.
+    """
+    rpy = np.asarray(rpy, dtype=float)
+    if rpy.shape[-1:] != (3,):
+        raise UrdfError(f"rpy must have shape (..., 3), got {rpy.shape}")
+    cr, cp, cy = np.cos(rpy[..., 0]), np.cos(rpy[..., 1]), np.cos(rpy[..., 2])
+    sr, sp, sy = np.sin(rpy[..., 0]), np.sin(rpy[..., 1]), np.sin(rpy[..., 2])
+    R = np.empty(rpy.shape[:-1] + (3, 3))
+    R[..., 0, 0] = cy * cp
+    R[..., 0, 1] = cy * sp * sr - sy * cr
+    R[..., 0, 2] = cy * sp * cr + sy * sr
+    R[..., 1, 0] = sy * cp
+    R[..., 1, 1] = sy * sp * sr + cy * cr
+    R[..., 1, 2] = sy * sp * cr - cy * sr
+    R[..., 2, 0] = -sp
+    R[..., 2, 1] = cp * sr
+    R[..., 2, 2] = cp * cr
+    return R
+
+
+# ---------------------------------------------------------------------------
+# Parsing
+# ---------------------------------------------------------------------------
+
+
+def _local(tag: str) -> str:
+    """Tag without an XML namespace (``{ns}robot`` -> ``robot``)."""
+    return tag.rsplit("}", 1)[-1] if isinstance(tag, str) else ""
+
+
+def _children(elem: ET.Element, tag: str) -> list[ET.Element]:
+    return [c for c in elem if _local(c.tag) == tag]
+
+
+def _number(token: str, where: str) -> float:
+    if _NUMBER_RE.fullmatch(token):
+        return float(token)
+    try:
+        value = float(token)
+    except ValueError:
+        raise UrdfError(f"{where}: non-numeric value {token!r}") from None
+    if not np.isfinite(value):
+        raise UrdfError(f"{where}: non-finite value {token!r}")
+    raise UrdfError(f"{where}: non-numeric value {token!r}")
+
+
+def _vector_attr(elem: ET.Element | None, attr: str, default: tuple[float, ...], where: str) -> np.ndarray:
+    """A 3-number attribute like ``xyz="0 0 0.1"``; ``default`` when element or attribute is missing."""
+    if elem is None or elem.get(attr) is None:
+        return np.array(default, dtype=float)
+    text = elem.get(attr)
+    where = f"{where} {attr}={text!r}"
+    tokens = text.split()
+    if len(tokens) != 3:
+        raise UrdfError(f"{where}: expected 3 numbers, found {len(tokens)}")
+    return np.array([_number(t, where) for t in tokens])
+
+
+def _scalar_attr(elem: ET.Element, attr: str, where: str) -> float:
+    text = elem.get(attr, "")
+    return _number(text.strip(), f"{where} {attr}={text!r}")
+
+
+def _only_child(elem: ET.Element, tag: str, where: str) -> ET.Element | None:
+    found = _children(elem, tag)
+    if len(found) > 1:
+        raise UrdfError(f"{where} has {len(found)} <{tag}> elements; expected at most one")
+    return found[0] if found else None
+
+
+def _link_ref(joint: ET.Element, tag: str, where: str, links: set[str]) -> str:
+    elem = _only_child(joint, tag, where)
+    if elem is None or not elem.get("link"):
+        raise UrdfError(f"{where} has no <{tag} link=...>")
+    name = elem.get("link")
+    if name not in links:
+        raise UrdfError(f"{where} references unknown link {name!r} as {tag}")
+    return name
+
+
+def _parse_links(robot: ET.Element) -> tuple[str, ...]:
+    names: list[str] = []
+    seen: set[str] = set()
+    for i, link in enumerate(_children(robot, "link")):
+        name = link.get("name")
+        if not name:
+            raise UrdfError(f"<link> number {i + 1} has no name attribute")
+        if name in seen:
+            raise UrdfError(f"duplicate link name {name!r}")
+        seen.add(name)
+        names.append(name)
+    return tuple(names)
+
+
+def _parse_limits(elem: ET.Element, jtype: str, where: str) -> tuple[float | None, float | None]:
+    if jtype not in _LIMITED_TYPES:
+        return None, None  # continuous and fixed joints have no position limits
+    limit = _only_child(elem, "limit", where)
+    if limit is None:
+        raise UrdfError(f"{where}: a {jtype} joint needs <limit lower=... upper=...>")
+    missing = [a for a in ("lower", "upper") if limit.get(a) is None]
+    if missing:
+        raise UrdfError(f"{where}: <limit> has no {' or '.join(missing)} attribute")
+    lower = _scalar_attr(limit, "lower", f"{where} <limit>")
+    upper = _scalar_attr(limit, "upper", f"{where} <limit>")
+    if lower > upper:
+        raise UrdfError(f"{where} <limit>: lower={limit.get('lower')!r} is greater than upper={limit.get('upper')!r}")
+    return lower, upper
+
+
+def _parse_joint(elem: ET.Element, index: int, links: set[str]) -> UrdfJoint:
+    name = elem.get("name")
+    if not name:
+        raise UrdfError(f"<joint> number {index + 1} has no name attribute")
+    where = f"joint {name!r}"
+    jtype = elem.get("type")
+    if not jtype:
+        raise UrdfError(f"{where} has no type attribute")
+    if jtype in _UNSUPPORTED_TYPES:
+        raise UrdfError(f"{where}: joint type {jtype!r} is not supported; supported: {choices(JOINT_TYPES)}")
+    if jtype not in JOINT_TYPES:
+        raise UrdfError(f"{where}: unknown joint type {jtype!r}; expected one of {choices(JOINT_TYPES)}")
+    parent = _link_ref(elem, "parent", where, links)
+    child = _link_ref(elem, "child", where, links)
+    if parent == child:
+        raise UrdfError(f"{where} connects link {parent!r} to itself")
+    origin = _only_child(elem, "origin", where)
+    xyz = _vector_attr(origin, "xyz", (0.0, 0.0, 0.0), f"{where} <origin>")
+    rpy = _vector_attr(origin, "rpy", (0.0, 0.0, 0.0), f"{where} <origin>")
+    axis_elem = _only_child(elem, "axis", where)
+    axis = _vector_attr(axis_elem, "xyz", (1.0, 0.0, 0.0), f"{where} <axis>")
+    if not np.any(axis):
+        if jtype != "fixed":
+            raise UrdfError(f"{where} <axis xyz={axis_elem.get('xyz')!r}>: axis must not be zero")
+        axis = np.array([1.0, 0.0, 0.0])  # exporters write "0 0 0" on fixed joints; the axis is unused
+    lower, upper = _parse_limits(elem, jtype, where)
+    return UrdfJoint(
+        name=name,
+        type=jtype,
+        parent=parent,
+        child=child,
+        origin_xyz=xyz,
+        origin_rpy=rpy,
+        axis=axis,
+        lower=lower,
+        upper=upper,
+    )
+
+
+def _check_tree(links: tuple[str, ...], joints: tuple[UrdfJoint, ...]) -> str:
+    """Check that links and joints form one tree; return the root link."""
+    if not links:
+        raise UrdfError("robot has no <link>")
+    link_set = set(links)
+    if len(link_set) != len(links):
+        dup = next(n for n in links if links.count(n) > 1)
+        raise UrdfError(f"duplicate link name {dup!r}")
+    joint_names: set[str] = set()
+    parent_of: dict[str, UrdfJoint] = {}
+    for j in joints:
+        if j.name in joint_names:
+            raise UrdfError(f"duplicate joint name {j.name!r}")
+        joint_names.add(j.name)
+        for role, link in (("parent", j.parent), ("child", j.child)):
+            if link not in link_set:
+                raise UrdfError(f"joint {j.name!r} references unknown link {link!r} as {role}")
+        if j.child in parent_of:
+            raise UrdfError(
+                f"link {j.child!r} has two parents: joints {parent_of[j.child].name!r} and {j.name!r}"
+            )
+        parent_of[j.child] = j
+    roots = [n for n in links if n not in parent_of]
+    if len(roots) > 1:
+        raise UrdfError(f"more than one root link (links that are no joint's child): {choices(roots)}")
+    if not roots:
+        raise UrdfError(f"no root link: every link is some joint's child, so the joints form a cycle: {_a_cycle(links[0], parent_of)}")
+    # One root and one parent per link: whatever the root cannot reach lies on a cycle.
+    reached = {roots[0]}
+    children: dict[str, list[str]] = {}
+    for j in joints:
+        children.setdefault(j.parent, []).append(j.child)
+    stack = [roots[0]]
+    while stack:
+        for c in children.get(stack.pop(), ()):
+            if c not in reached:
+                reached.add(c)
+                stack.append(c)
+    for n in links:
+        if n not in reached:
+            raise UrdfError(f"the joints form a cycle: {_a_cycle(n, parent_of)}")
+    return roots[0]
+
+
+def _a_cycle(start: str, parent_of: dict[str, UrdfJoint]) -> str:
+    """Describe the cycle reached by walking up from ``start`` (each link has a parent)."""
+    path = [start]
+    seen = {start: 0}
+    link = start
+    while True:
+        link = parent_of[link].parent
+        if link in seen:
+            loop = path[seen[link]:] + [link]
+            return " <- ".join(repr(n) for n in loop)
+        seen[link] = len(path)
+        path.append(link)
+
+
+def _xml_root(data: str | bytes, source: str) -> ET.Element:
+    try:
+        return ET.fromstring(data)
+    except ET.ParseError as exc:
+        line = exc.position[0] if getattr(exc, "position", None) else None
+        raise UrdfError(f"{source}:{line}: malformed XML: {exc}") from None
+
+
+def _robot_from_xml(root: ET.Element, source: str) -> UrdfRobot:
+    try:
+        if _local(root.tag) != "robot":
+            raise UrdfError(f"root element is <{_local(root.tag)}>, expected <robot>")
+        links = _parse_links(root)
+        link_set = set(links)
+        joints: list[UrdfJoint] = []
+        seen: set[str] = set()
+        for i, elem in enumerate(_children(root, "joint")):
+            joint = _parse_joint(elem, i, link_set)
+            if joint.name in seen:
+                raise UrdfError(f"duplicate joint name {joint.name!r}")
+            seen.add(joint.name)
+            joints.append(joint)
+        root_link = _check_tree(links, tuple(joints))
+        return UrdfRobot(name=root.get("name", ""), links=links, joints=tuple(joints), root_link=root_link)
+    except UrdfError as exc:
+        raise UrdfError(f"{source}: {exc}") from None
+
+
+def parse_urdf(text: str, source: str = "<string>") -> UrdfRobot:
+    """Parse URDF XML text into its kinematic tree.
+
+    Only direct children of ``<robot>`` count, so the ``<joint>`` inside a
+    ``<transmission>`` is not mistaken for a kinematic joint.
+
+    Args:
+        text: The whole file.
+        source: Path or label used in error messages.
+
+    Returns:
+        The robot; its arrays are read-only.
+
+    Raises:
+        UrdfError: malformed XML (``source:line:`` from the XML parser) or an
+            invalid robot (message names the element and value).
+    """
+    return _robot_from_xml(_xml_root(text.removeprefix("\ufeff"), source), source)
+
+
+def read_urdf(path: str | os.PathLike) -> UrdfRobot:
+    """Read and parse a URDF file (the XML parser honours its encoding declaration).
+
+    Raises:
+        UrdfError: malformed file (message starts with the path).
+        GsikFileError: the file cannot be read.
+    """
+    source = os.fspath(path)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        err = GsikFileError(f"cannot read {source!r}: {exc.strerror or exc}")
+        err.errno, err.filename = exc.errno, source
+        raise err from exc
+    return _robot_from_xml(_xml_root(data, source), source)
+
+
+__all__ = ["JOINT_TYPES", "UrdfJoint", "UrdfRobot", "matrix_from_rpy", "parse_urdf", "read_urdf"]
