@@ -48,7 +48,14 @@ class UrdfError(GsikError, ValueError):
 
 
 class GsikFileError(GsikError, OSError):
-    """A file could not be read or written (permission, missing folder, full disk)."""
+    """A file could not be read or written (permission, missing folder, full disk).
+
+    ``errno`` and ``filename`` may be set as on an ``OSError``; the message
+    stays the readable sentence it was made with.
+    """
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else super().__str__()
 
 
 def choices(names: Iterable[str]) -> str:
