@@ -31,38 +31,42 @@ CONVERGED, STALLED, BUDGET_EXHAUSTED = 0, 1, 2
 
 @njit(cache=True)
 def rotvec_from_matrix(R):
-    """Log map: rotation vector (3,) [rad] of a rotation matrix (3, 3)."""
+    """Log map: rotation vector (3,) [rad] of a rotation matrix (3, 3), accurate at every angle."""
     out = np.empty(3)
-    cos = (R[0, 0] + R[1, 1] + R[2, 2] - 1.0) * 0.5
-    cos = min(1.0, max(-1.0, cos))
-    angle = math.acos(cos)
     wx = R[2, 1] - R[1, 2]
     wy = R[0, 2] - R[2, 0]
     wz = R[1, 0] - R[0, 1]
+    s = 0.5 * math.sqrt(wx * wx + wy * wy + wz * wz)  # sin(angle)
+    c = 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)  # cos(angle)
+    # atan2, not acos: acos loses half the digits near 0 and pi.
+    angle = math.atan2(s, c)
     if angle < 1e-6:
         out[0] = 0.5 * wx
         out[1] = 0.5 * wy
         out[2] = 0.5 * wz
         return out
-    if angle > math.pi - 1e-4:
-        # Near pi the antisymmetric part vanishes; the axis comes from (R + I) / 2 = a a^T.
-        i = 0
-        for k in range(1, 3):
-            if R[k, k] > R[i, i]:
-                i = k
-        d = math.sqrt(max(0.5 * (R[i, i] + 1.0), 1e-300))
-        for k in range(3):
-            out[k] = 0.5 * (R[k, i] + R[i, k]) / (2.0 * d) if k != i else d
-        n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2)
-        if out[0] * wx + out[1] * wy + out[2] * wz < 0.0:
-            n = -n
-        for k in range(3):
-            out[k] *= angle / n
+    if c > -0.5:
+        f = angle / (2.0 * s)
+        out[0] = wx * f
+        out[1] = wy * f
+        out[2] = wz * f
         return out
-    s = angle / (2.0 * math.sin(angle))
-    out[0] = wx * s
-    out[1] = wy * s
-    out[2] = wz * s
+    # Past 120 degrees the antisymmetric part shrinks; the symmetric part minus c I is (1 - c) a a^T exactly.
+    i = 0
+    best = -1.0
+    for k in range(3):
+        mk = R[k, k] - c
+        if mk > best:
+            best = mk
+            i = k
+    norm = math.sqrt(max(best * (1.0 - c), 1e-300))
+    for k in range(3):
+        mki = 0.5 * (R[k, i] + R[i, k]) - (c if k == i else 0.0)
+        out[k] = mki / norm
+    if out[0] * wx + out[1] * wy + out[2] * wz < 0.0:
+        angle = -angle
+    for k in range(3):
+        out[k] *= angle
     return out
 
 
