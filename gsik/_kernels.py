@@ -231,6 +231,19 @@ def normal_equations(J, e, row_w, eff_dofs, eff_n, A, b):
 
 
 @njit(cache=True)
+def _projected_residual(A, b, x, lo, hi):
+    """``|b - A x|`` over the unknowns not held at a bound by an outward-pointing residual."""
+    res2 = 0.0
+    for i in range(b.shape[0]):
+        r = b[i]
+        for j in range(b.shape[0]):
+            r -= A[i, j] * x[j]
+        if not ((x[i] <= lo[i] and r < 0.0) or (x[i] >= hi[i] and r > 0.0)):
+            res2 += r * r
+    return math.sqrt(res2)
+
+
+@njit(cache=True)
 def projected_gauss_seidel(A, b, x, lo, hi, sweeps, res_tol, upd_tol, x_prev, stall_tol, stats):
     """Projected Gauss-Seidel on ``A x = b`` with ``lo <= x <= hi``, in place on ``x``.
 
@@ -264,8 +277,13 @@ def projected_gauss_seidel(A, b, x, lo, hi, sweeps, res_tol, upd_tol, x_prev, st
             x[i] = xi
         res = math.sqrt(res2)
         upd = math.sqrt(upd2)
-        if res < res_tol or upd < upd_tol:
+        if upd < upd_tol:
             break
+        if res < res_tol:
+            # The in-sweep estimate lags (each r_i saw only part of the sweep's updates); confirm it.
+            res = _projected_residual(A, b, x, lo, hi)
+            if res < res_tol:
+                break
         if stall_tol > 0.0:
             d2 = 0.0
             for i in range(n):

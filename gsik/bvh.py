@@ -23,8 +23,6 @@ from __future__ import annotations
 
 import os
 import re
-import secrets
-import stat
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -32,7 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gsik.errors import BvhError, GsikFileError, choices
+from gsik.errors import BvhError, choices
+from gsik.fileio import atomic_write_text, file_error
 
 #: The six BVH channel names, in canonical spelling.
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
@@ -53,12 +52,6 @@ _KEYWORDS = frozenset({"{", "}", "ROOT", "JOINT", "END", "OFFSET", "CHANNELS", "
 # ---------------------------------------------------------------------------
 # Data
 # ---------------------------------------------------------------------------
-
-
-def _frozen(a, dtype=float) -> np.ndarray:
-    a = np.array(a, dtype=dtype)
-    a.flags.writeable = False
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,6 +193,8 @@ class BvhClip:
     def channel_index(self, joint: int | str) -> slice:
         """Columns of :attr:`motion` holding ``joint``'s channels (an index or a name)."""
         j = self.joint_index(joint) if isinstance(joint, str) else int(joint)
+        if not 0 <= j < self.n_joints:
+            raise BvhError(f"joint index {j} out of range [0, {self.n_joints})")
         return slice(self._starts[j], self._starts[j + 1])
 
     def children(self, joint: int) -> tuple[int, ...]:
@@ -303,14 +298,13 @@ def _number(token: str, line: int, where: str, source: str) -> float:
 
 
 def _bad_number(token: str, line: int, where: str, source: str) -> BvhError:
+    """The error for a token that is not a strict finite number."""
     try:
-        value = float(token)
+        finite = bool(np.isfinite(float(token)))
     except ValueError:
-        value = 0.0
-    else:
-        if not np.isfinite(value):
-            return BvhError(f"non-finite value {token!r} in {where}", line=line, path=source)
-    return BvhError(f"non-numeric value {token!r} in {where}", line=line, path=source)
+        finite = True  # not a number at all
+    kind = "non-numeric" if finite else "non-finite"
+    return BvhError(f"{kind} value {token!r} in {where}", line=line, path=source)
 
 
 def _split_lines(text: str) -> list[str]:
@@ -511,10 +505,9 @@ def _parse_motion_header(lines: list[str], motion_at: int, source: str) -> tuple
         raise BvhError("missing 'Frames:' line after MOTION", line=motion_at + 1, path=source)
     m = _FRAMES_RE.fullmatch(work[i].strip())
     if m is None:
-        what = "missing 'Frames:' line before 'Frame Time:'" if _FRAME_TIME_RE.fullmatch(work[i].strip()) else (
-            f"expected 'Frames: <count>' after MOTION, found {work[i].strip()!r}"
-        )
-        raise BvhError(what, line=i + 1, path=source)
+        if _FRAME_TIME_RE.fullmatch(work[i].strip()):
+            raise BvhError("missing 'Frames:' line before 'Frame Time:'", line=i + 1, path=source)
+        raise BvhError(f"expected 'Frames: <count>' after MOTION, found {work[i].strip()!r}", line=i + 1, path=source)
     if not _INT_RE.fullmatch(m.group(1)):
         raise BvhError(f"frame count must be an integer, found {m.group(1)!r}", line=i + 1, path=source)
     n_frames = int(m.group(1))
@@ -577,7 +570,7 @@ def _motion_values(
             line = _line_of_token(lines, start, found - 1) if found else start
             raise BvhError(f"truncated MOTION data: {need}", line=line, path=source)
         line = _line_of_token(lines, start, expected)
-        raise BvhError(f"too many MOTION values: {need} (first extra value here)", line=line, path=source)
+        raise BvhError(f"too many MOTION values: {need}; the first extra value is on this line", line=line, path=source)
     return values.reshape(n_frames, n_channels)
 
 
@@ -633,7 +626,7 @@ def _read_text(path: str | os.PathLike) -> str:
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
-        raise _file_error("cannot read", path, exc) from exc
+        raise file_error("cannot read BVH file", path, exc) from exc
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError:
@@ -697,79 +690,8 @@ def format_bvh(clip: BvhClip, precision: int = 6) -> str:
     return "\n".join(out) + "\n"
 
 
-def _file_error(action: str, path: str | os.PathLike, exc: OSError) -> GsikFileError:
-    reason = exc.strerror or str(exc) or type(exc).__name__
-    err = GsikFileError(f"{action} {os.fspath(path)!r}: {reason}")
-    err.errno, err.filename = exc.errno, os.fspath(path)
-    return err
-
-
-def _fsync_directory(directory: str) -> None:
-    """Make the rename durable; not possible on every platform, so best effort."""
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Replace ``path`` with ``text`` (UTF-8) atomically.
-
-    Writes a temporary file in the same directory, fsyncs it and renames it
-    over ``path``; on any failure the temporary file is removed and an
-    existing ``path`` is left untouched. An existing file's permissions are
-    kept.
-
-    Raises:
-        GsikFileError: the file cannot be written.
-    """
-    target = os.path.abspath(os.fspath(path))
-    directory, base = os.path.split(target)
-    try:
-        mode = stat.S_IMODE(os.stat(target).st_mode)
-    except FileNotFoundError:
-        mode = None
-    except OSError as exc:
-        raise _file_error("cannot write", path, exc) from exc
-    tmp = ""
-    try:
-        flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
-        for _ in range(100):
-            tmp = os.path.join(directory, f".{base}.{secrets.token_hex(6)}.tmp")
-            try:
-                fd = os.open(tmp, flags, 0o666)  # 0o666 & ~umask, like a normal new file
-                break
-            except FileExistsError:
-                continue
-        else:  # pragma: no cover - 100 random-name collisions
-            raise FileExistsError(f"no free temporary name next to {target}")
-        with os.fdopen(fd, "wb") as f:
-            f.write(text.encode("utf-8"))
-            f.flush()
-            os.fsync(f.fileno())
-        if mode is not None:
-            os.chmod(tmp, mode)
-        os.replace(tmp, target)
-        tmp = ""
-    except OSError as exc:
-        raise _file_error("cannot write", path, exc) from exc
-    finally:
-        if tmp:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-    _fsync_directory(directory)
-
-
 def write_bvh(path: str | os.PathLike, clip: BvhClip, precision: int = 6) -> None:
-    """Write ``clip`` to ``path`` atomically (see :func:`atomic_write_text`).
+    """Write ``clip`` to ``path`` atomically (see :func:`gsik.fileio.atomic_write_text`).
 
     The text is formatted before the file system is touched, so a clip that
     cannot be formatted never affects an existing file.
@@ -811,21 +733,6 @@ def _axis_rotation(axis: int, degrees: np.ndarray) -> np.ndarray:
     R[:, i, j] = -s
     R[:, j, i] = s
     return R
-
-
-def _rot_x(degrees: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) rotations about X by ``degrees`` (n,)."""
-    return _axis_rotation(0, degrees)
-
-
-def _rot_y(degrees: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) rotations about Y by ``degrees`` (n,)."""
-    return _axis_rotation(1, degrees)
-
-
-def _rot_z(degrees: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) rotations about Z by ``degrees`` (n,)."""
-    return _axis_rotation(2, degrees)
 
 
 def bvh_local_rotations(clip: BvhClip) -> np.ndarray:
@@ -902,7 +809,6 @@ __all__ = [
     "CHANNEL_NAMES",
     "BvhClip",
     "BvhJoint",
-    "atomic_write_text",
     "bvh_forward_kinematics",
     "bvh_local_rotations",
     "bvh_local_translations",

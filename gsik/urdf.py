@@ -20,7 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gsik.errors import GsikFileError, UrdfError, choices
+from gsik.errors import UrdfError, choices
+from gsik.fileio import file_error
 
 #: Joint types this module parses (prismatic is parsed; conversion may reject it).
 JOINT_TYPES = ("revolute", "continuous", "fixed", "prismatic")
@@ -373,7 +374,8 @@ def _check_tree(links: tuple[str, ...], joints: tuple[UrdfJoint, ...]) -> str:
     if len(roots) > 1:
         raise UrdfError(f"more than one root link (links that are no joint's child): {choices(roots)}")
     if not roots:
-        raise UrdfError(f"no root link: every link is some joint's child, so the joints form a cycle: {_a_cycle(links[0], parent_of)}")
+        cycle = _a_cycle(links[0], parent_of)
+        raise UrdfError(f"no root link: every link is some joint's child, so the joints form a cycle: {cycle}")
     # One root and one parent per link: whatever the root cannot reach lies on a cycle.
     reached = {roots[0]}
     children: dict[str, list[str]] = {}
@@ -464,9 +466,7 @@ def read_urdf(path: str | os.PathLike) -> UrdfRobot:
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
-        err = GsikFileError(f"cannot read {source!r}: {exc.strerror or exc}")
-        err.errno, err.filename = exc.errno, source
-        raise err from exc
+        raise file_error("cannot read URDF file", path, exc) from exc
     return _robot_from_xml(_xml_root(data, source), source)
 
 
