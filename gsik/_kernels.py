@@ -20,8 +20,9 @@ import numpy as np
 from gsik._jit import njit
 
 # Indices into the settings vector passed to the kernels.
-S_DAMPING, S_SWEEPS, S_RES_TOL, S_UPD_TOL, S_STALL_TOL, S_MAX_STEP, S_ADAPTIVE, S_WARM, S_POS_TOL, S_ORI_TOL = range(10)
-N_SETTINGS = 10
+(S_DAMPING, S_SWEEPS, S_RES_TOL, S_UPD_TOL, S_STALL_TOL, S_MAX_STEP, S_ADAPTIVE, S_WARM, S_POS_TOL, S_ORI_TOL,
+ S_SETTLE_TOL, S_SUBSPACE) = range(12)
+N_SETTINGS = 12
 # Indices into the statistics vector the kernels fill.
 O_SWEEPS, O_RESIDUAL, O_UPDATE, O_COST, O_STEP_NORM, O_ACCEPTED, O_LAMBDA, O_STATUS, O_ITERATIONS = range(9)
 N_STATS = 9
@@ -312,6 +313,13 @@ def _finish_errors(row_w, err, pos_tol, ori_tol):
 
 
 @njit(cache=True)
+def _add_clamped(q, x, lower, upper, out):
+    """``out = clip(q + x, lower, upper)``: the bounds on x keep q + x inside up to one rounding."""
+    for i in range(q.shape[0]):
+        out[i] = min(max(q[i] + x[i], lower[i]), upper[i])
+
+
+@njit(cache=True)
 def _bounds(q, lower, upper, max_step, lo, hi):
     for i in range(q.shape[0]):
         lo[i] = lower[i] - q[i]
@@ -367,9 +375,13 @@ def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R
             x[i] = min(max(x[i], lo[i]), hi[i])
     else:
         x[:] = 0.0
-    projected_gauss_seidel(A, b, x, lo, hi, int(settings[S_SWEEPS]), settings[S_RES_TOL], settings[S_UPD_TOL],
-                           x_prev, settings[S_STALL_TOL], stats)
-    q_new = q + x
+    if settings[S_SUBSPACE] > 0.0:
+        bounded_solve(A, b, x, lo, hi, int(settings[S_SWEEPS]), stats)
+    else:
+        projected_gauss_seidel(A, b, x, lo, hi, int(settings[S_SWEEPS]), settings[S_RES_TOL], settings[S_UPD_TOL],
+                               x_prev, settings[S_STALL_TOL], stats)
+    q_new = np.empty(n)
+    _add_clamped(q, x, lower, upper, q_new)
     R2 = np.empty_like(R)
     p2 = np.empty_like(p)
     err2 = np.empty_like(err)
@@ -382,13 +394,18 @@ def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R
         while cost > cost0 and tries < 3:
             for i in range(n):
                 x[i] *= 0.5
-                q_new[i] = q[i] + x[i]
+            _add_clamped(q, x, lower, upper, q_new)
             cost = _evaluate(model, q_new, root, W, target_p, target_R, row_w, R2, p2, e, err2)
             tries += 1
         if cost > cost0:
             accepted = 0.0
             x[:] = 0.0
             lam_state[0] = min(lam * 10.0, 1e6)
+            cost = cost0
+        elif cost0 - cost <= settings[S_SETTLE_TOL] * cost0:
+            # So little left to gain that the pose is held: a best reach settles instead of creeping.
+            accepted = 0.0
+            x[:] = 0.0
             cost = cost0
         else:
             lam_state[0] = max(lam * (0.5 if tries == 0 else 4.0), damping)
@@ -547,6 +564,7 @@ def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations
         normal_equations(J, e, row_w, eff_dofs, eff_n, A, b)
         _bounds(q, lower, upper, settings[S_MAX_STEP], lo, hi)
         accepted = False
+        settled = False
         while lam < 1e8:
             Al[:, :] = A
             for i in range(n):
@@ -554,11 +572,11 @@ def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations
             x[:] = 0.0
             bounded_solve(Al, b, x, lo, hi, sweeps, pgs_stats)
             total_sweeps += int(pgs_stats[O_SWEEPS])
-            for i in range(n):
-                q_try[i] = q[i] + x[i]
+            _add_clamped(q, x, lower, upper, q_try)
             c = _evaluate(model, q_try, root, W, target_p, target_R, row_w, R2, p2, e, err2)
             if c < cost:
                 accepted = True
+                settled = cost - c <= settings[S_SETTLE_TOL] * cost
                 cost = c
                 q[:] = q_try
                 R[:, :, :] = R2
@@ -567,13 +585,16 @@ def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations
                 lam = max(lam * 0.3, 1e-9)
                 break
             lam *= 5.0
-        if not accepted or math.sqrt(np.sum(x * x)) < settings[S_STALL_TOL]:
+        if not accepted or settled or math.sqrt(np.sum(x * x)) < settings[S_STALL_TOL]:
             status = STALLED
             break
     # e and err must describe the final q (a refused trial overwrote them).
     cost = _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err)
     _finish_errors(row_w, err, pos_tol, ori_tol)
+    if status == STALLED and _finish_errors(row_w, err2, pos_tol, ori_tol):
+        status = CONVERGED
     stats[O_STATUS] = status
     stats[O_ITERATIONS] = it
     stats[O_SWEEPS] = total_sweeps
     stats[O_COST] = cost
+    stats[O_STEP_NORM] = math.sqrt(np.sum(x * x))

@@ -54,6 +54,14 @@ class SolverSettings:
         adaptive_damping: Halve or refuse a step that raises the error and
             raise the damping (Levenberg-Marquardt); off gives the paper's
             plain fixed-delta method.
+        settle_tolerance: With adaptive damping, a step that lowers the
+            weighted error by less than this fraction is not taken: the pose
+            is held as the best reach instead of creeping (also ends
+            :meth:`Solver.solve` attempts). 0 disables.
+        subspace_minimization: After the PGS sweeps, solve the unknowns that
+            are not on a limit exactly (Cholesky) and project: each step
+            then solves its linear system exactly, where the paper's few
+            sweeps solve it roughly. Off is the paper's method.
         warm_start: Start each frame's sweeps from the previous frame's ``dq``.
         orientation_weight: Weight of orientation rows relative to position
             rows [m/rad].
@@ -73,6 +81,8 @@ class SolverSettings:
     stall_tolerance: float = 1e-9
     max_step: float = 0.25
     adaptive_damping: bool = True
+    settle_tolerance: float = 1e-6
+    subspace_minimization: bool = False
     warm_start: bool = True
     orientation_weight: float = 0.5
     position_tolerance: float = 1e-4
@@ -114,6 +124,8 @@ class SolverSettings:
         v[_kernels.S_WARM] = float(self.warm_start)
         v[_kernels.S_POS_TOL] = self.position_tolerance
         v[_kernels.S_ORI_TOL] = self.orientation_tolerance
+        v[_kernels.S_SETTLE_TOL] = self.settle_tolerance
+        v[_kernels.S_SUBSPACE] = float(self.subspace_minimization)
         return v
 
 
