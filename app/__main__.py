@@ -1,0 +1,5 @@
+"""``python -m app``: run gsik-studio."""
+
+from app.main import main
+
+raise SystemExit(main())

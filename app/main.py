@@ -1,0 +1,84 @@
+"""``gsik-studio [pose.yaml]`` and ``gsik-studio --screenshot out.png [pose.yaml]``."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="gsik-studio", description="Interactive IK pose authoring (gsik).")
+    p.add_argument("pose", nargs="?", help="a pose file (.yaml) to open")
+    p.add_argument("--screenshot", metavar="PNG", help="render the window once to this PNG and exit")
+    p.add_argument("--size", default="1440x900", metavar="WxH", help="window size (default 1440x900)")
+    p.add_argument("--view", default="perspective", choices=("perspective", "front", "side", "top"),
+                   help="camera preset (default perspective)")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run gsik-studio; returns the exit code."""
+    args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+    except ValueError:
+        print(f"gsik-studio: --size must look like 1440x900, got {args.size!r}", file=sys.stderr)
+        return 2
+
+    os.environ.setdefault("QT_QPA_PLATFORM", "xcb" if sys.platform.startswith("linux") else "")
+    if not os.environ["QT_QPA_PLATFORM"]:
+        del os.environ["QT_QPA_PLATFORM"]
+    import pyvista as pv
+    from PySide6 import QtCore, QtWidgets
+
+    import gsik
+    from app.main_window import MainWindow
+    from app.model import Document
+
+    pv.global_theme.multi_samples = 0
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([sys.argv[0]])
+    app.setApplicationName("gsik-studio")
+    app.setOrganizationName("gsik")
+
+    if args.screenshot:
+        # A one-shot picture: no remembered geometry, no dialogs.
+        doc = Document()
+        if args.pose:
+            try:
+                warnings = doc.open(args.pose)
+            except gsik.GsikError as exc:
+                print(f"gsik-studio: {exc}", file=sys.stderr)
+                return 1
+            for w in warnings:
+                print(f"gsik-studio: warning: {w}", file=sys.stderr)
+        settings = QtCore.QSettings(QtCore.QSettings.IniFormat, QtCore.QSettings.UserScope, "gsik", "screenshot")
+        settings.clear()
+        window = MainWindow(doc, settings=settings)
+        window.resize(width, height)
+        window.show()
+        app.processEvents()
+        window.settle()
+        window.set_view(args.view)
+        window._update_readouts(force=True)
+        app.processEvents()
+        ok = window.save_screenshot(args.screenshot)
+        window.doc.history.set_clean()
+        window.close()
+        if not ok:
+            print(f"gsik-studio: could not write {args.screenshot}", file=sys.stderr)
+            return 1
+        print(args.screenshot)
+        return 0
+
+    window = MainWindow()
+    if window.settings.value("window/geometry") is None:
+        window.resize(width, height)
+    window.show()
+    if args.pose:
+        QtCore.QTimer.singleShot(0, lambda: window.open_path(args.pose, confirm=False))
+    return app.exec()
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

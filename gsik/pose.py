@@ -1,0 +1,473 @@
+"""Poses as YAML files: joint angles, the pinned root and every effector target.
+
+A pose file is plain YAML, readable and editable by hand::
+
+    # gsik pose
+    format: 1                   # version of this format
+    skeleton: biped             # the skeleton's name; must match the skeleton it is loaded on
+    root: right_foot            # the IK root: a joint or site, pinned to the world
+    root_transform:             # world transform of the root frame
+      position: [0.09, 0.0505, 0.0]        # [m]
+      orientation: [1.0, 0.0, 0.0, 0.0]    # unit quaternion (w, x, y, z)
+    joints:                     # every degree of freedom by name, angle [rad]
+      waist.x: 0.0
+      waist.y: 0.0
+      # ... one line per DOF, all of them (see Skeleton.dof_names)
+    targets:                    # every effector of this root (all effector sites but the root)
+      left_hand:
+        position: [-0.19, 0.049, 0.753]    # world position [m]
+        orientation: [1.0, 0.0, 0.0, 0.0]  # world orientation, unit quaternion (w, x, y, z)
+        enabled: true           # optional, default true: false leaves the effector free
+        weight: 1.0             # optional, default 1.0: relative importance, >= 0
+        position_only: false    # optional, default false: true ignores the orientation
+      # ... one entry per effector
+
+Rules:
+
+- Angles are radians, lengths metres, in the skeleton's world frame
+  (for the bundled biped: z up, facing +y, right side +x).
+- ``format``, ``skeleton``, ``root``, ``root_transform``, ``joints`` and
+  ``targets`` are required; so are every DOF of the skeleton and every
+  effector of the root, each with ``position`` and ``orientation``.
+- Unknown keys, unknown joints or effectors, a target for the root itself,
+  NaN or infinite numbers and quaternions that are not of unit norm
+  (within 1 %) are errors (:class:`gsik.PoseError`, naming the file, the
+  line, the field and the value). A quaternion a little off unit norm is
+  normalised.
+- An angle outside its joint's limits is clamped into them and reported as
+  a warning in :attr:`PoseRead.warnings` (never silently).
+- Numbers are written with Python's shortest exact ``repr``, so writing a
+  pose and reading it back gives exactly the same numbers.
+
+:func:`write_pose` replaces the file atomically: a failed save leaves an
+existing file untouched. This module needs NumPy and PyYAML only.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any, NamedTuple
+
+import numpy as np
+import yaml
+
+from gsik.errors import PoseError, choices
+from gsik.fileio import atomic_write_text, read_text
+from gsik.rotations import matrix_from_quaternion, quaternion_from_matrix, transform
+from gsik.skeleton import Skeleton
+
+#: The version of the pose format this module reads and writes.
+POSE_FORMAT = 1
+
+#: How far from unit norm a quaternion in a file may be (it is normalised).
+QUATERNION_NORM_TOLERANCE = 0.01
+
+#: Angles within this of a limit [rad] count as inside it (no warning).
+LIMIT_TOLERANCE = 1e-9
+
+_TOP_KEYS = ("format", "skeleton", "root", "root_transform", "joints", "targets")
+_TRANSFORM_KEYS = ("position", "orientation")
+_TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only")
+
+
+def _floats(value, n: int, what: str) -> tuple[float, ...]:
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise PoseError(f"{what} must be {n} numbers, got {value!r}") from None
+    if a.shape != (n,):
+        raise PoseError(f"{what} must be {n} numbers, got {value!r}")
+    if not np.all(np.isfinite(a)):
+        raise PoseError(f"{what} must be finite, got {a.tolist()}")
+    return tuple(float(v) for v in a)
+
+
+def _unit_quaternion(value, what: str) -> tuple[float, float, float, float]:
+    q = _floats(value, 4, what)
+    norm = math.sqrt(sum(v * v for v in q))
+    if abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE:
+        raise PoseError(f"{what} must be a unit quaternion (w, x, y, z), got {list(q)} of norm {norm:.6g}")
+    return q
+
+
+@dataclass(frozen=True)
+class TargetPose:
+    """One effector's target as stored in a pose.
+
+    Attributes:
+        position: World position (3,) [m].
+        orientation: World orientation, unit quaternion (w, x, y, z).
+        enabled: False leaves the effector free (the solver ignores it).
+        weight: Relative importance (>= 0).
+        position_only: True ignores the orientation in the solve (it is kept).
+    """
+
+    position: tuple[float, float, float]
+    orientation: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+    enabled: bool = True
+    weight: float = 1.0
+    position_only: bool = False
+
+    def __post_init__(self):
+        object.__setattr__(self, "position", _floats(self.position, 3, "target position"))
+        object.__setattr__(self, "orientation", _unit_quaternion(self.orientation, "target orientation"))
+        w = _floats([self.weight], 1, "target weight")[0]
+        if w < 0.0:
+            raise PoseError(f"target weight must be >= 0, got {w!r}")
+        object.__setattr__(self, "weight", w)
+        object.__setattr__(self, "enabled", bool(self.enabled))
+        object.__setattr__(self, "position_only", bool(self.position_only))
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """The orientation as a rotation matrix (3, 3)."""
+        q = np.array(self.orientation)
+        return matrix_from_quaternion(q / np.linalg.norm(q))
+
+    @classmethod
+    def from_transform(cls, world_from_effector: np.ndarray, enabled: bool = True, weight: float = 1.0,
+                       position_only: bool = False) -> TargetPose:
+        """A target at a world transform (4, 4)."""
+        T = np.asarray(world_from_effector, dtype=float)
+        return cls(tuple(T[:3, 3]), tuple(quaternion_from_matrix(T[:3, :3])), enabled, weight, position_only)
+
+    def replace(self, **changes) -> TargetPose:
+        """A copy with some fields changed (validated again)."""
+        fields = dict(position=self.position, orientation=self.orientation, enabled=self.enabled,
+                      weight=self.weight, position_only=self.position_only)
+        fields.update(changes)
+        return TargetPose(**fields)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A complete, immutable pose of one skeleton: what a pose file holds.
+
+    Attributes:
+        skeleton: Name of the skeleton.
+        root: The IK root (a joint or site), pinned to the world.
+        root_position: World position (3,) [m] of the root frame.
+        root_orientation: World orientation of the root frame, unit quaternion (w, x, y, z).
+        joints: ``{DOF name: angle [rad]}`` in the skeleton's DOF order (read-only).
+        targets: ``{effector name: TargetPose}`` for every effector of the root (read-only).
+    """
+
+    skeleton: str
+    root: str
+    root_position: tuple[float, float, float]
+    root_orientation: tuple[float, float, float, float]
+    joints: Mapping[str, float]
+    targets: Mapping[str, TargetPose]
+
+    def __post_init__(self):
+        object.__setattr__(self, "root_position", _floats(self.root_position, 3, "root position"))
+        object.__setattr__(self, "root_orientation", _unit_quaternion(self.root_orientation, "root orientation"))
+        joints = {}
+        for name, value in dict(self.joints).items():
+            joints[str(name)] = _floats([value], 1, f"joint {name!r}")[0]
+        targets = {}
+        for name, t in dict(self.targets).items():
+            if not isinstance(t, TargetPose):
+                raise PoseError(f"target {name!r} must be a TargetPose, got {type(t).__name__}")
+            targets[str(name)] = t
+        object.__setattr__(self, "joints", MappingProxyType(joints))
+        object.__setattr__(self, "targets", MappingProxyType(targets))
+
+    def q(self, skeleton: Skeleton) -> np.ndarray:
+        """The angles (n_dofs,) [rad] in ``skeleton``'s DOF order."""
+        try:
+            return np.array([self.joints[n] for n in skeleton.dof_names])
+        except KeyError as exc:
+            raise PoseError(f"pose has no angle for {exc.args[0]!r}") from None
+
+    @property
+    def world_from_root(self) -> np.ndarray:
+        """World transform (4, 4) of the root frame."""
+        q = np.array(self.root_orientation)
+        return transform(matrix_from_quaternion(q / np.linalg.norm(q)), np.array(self.root_position))
+
+    def replace(self, **changes) -> Pose:
+        """A copy with some fields changed (validated again)."""
+        fields = dict(skeleton=self.skeleton, root=self.root, root_position=self.root_position,
+                      root_orientation=self.root_orientation, joints=self.joints, targets=self.targets)
+        fields.update(changes)
+        return Pose(**fields)
+
+
+class PoseRead(NamedTuple):
+    """What reading a pose file gives.
+
+    Attributes:
+        pose: The validated :class:`Pose` (angles clamped into the limits).
+        warnings: One sentence per problem that was repaired (an angle
+            clamped into its limits); empty when the file was clean.
+    """
+
+    pose: Pose
+    warnings: tuple[str, ...]
+
+
+# -- reading -----------------------------------------------------------------
+
+def _key_lines(node: yaml.Node, path: tuple, lines: dict, where: str) -> None:
+    """Record the 1-based line of every mapping key / sequence item; reject duplicate keys."""
+    lines[path] = node.start_mark.line + 1
+    if isinstance(node, yaml.MappingNode):
+        seen: dict[Any, int] = {}
+        for key_node, value_node in node.value:
+            key = key_node.value if isinstance(key_node, yaml.ScalarNode) else None
+            line = key_node.start_mark.line + 1
+            if key in seen:
+                raise PoseError(f"{where}:{line}: duplicate key {key!r} (first at line {seen[key]})")
+            seen[key] = line
+            _key_lines(value_node, path + (key,), lines, where)
+            lines[path + (key,)] = line  # the key's line, not its value's
+    elif isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            _key_lines(item, path + (i,), lines, where)
+
+
+class _Reader:
+    """Validates parsed YAML, naming file, line and field in every error."""
+
+    def __init__(self, source: str, lines: dict):
+        self.source = source
+        self.lines = lines
+
+    def fail(self, path: tuple, message: str):
+        line = None
+        p = path
+        while p and line is None:
+            line = self.lines.get(p)
+            p = p[:-1]
+        where = self.source if line is None else f"{self.source}:{line}"
+        field = ".".join(str(k) for k in path)
+        raise PoseError(f"{where}: {field}: {message}" if field else f"{where}: {message}")
+
+    def mapping(self, value, path: tuple, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict:
+        if not isinstance(value, dict):
+            self.fail(path, f"must be a mapping of {', '.join(required + optional)}, got {_show(value)}")
+        keys = [k for k in value if not isinstance(k, str)]
+        if keys:
+            self.fail(path, f"keys must be names, got {keys[0]!r}")
+        unknown = [k for k in value if k not in required + optional]
+        if unknown:
+            self.fail(path + (unknown[0],), f"unknown field; valid fields: {choices(required + optional)}")
+        missing = [k for k in required if k not in value]
+        if missing:
+            self.fail(path, f"missing field(s) {choices(missing)}")
+        return value
+
+    def number(self, value, path: tuple) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(path, f"must be a number, got {_show(value)}")
+        v = float(value)
+        if not math.isfinite(v):
+            self.fail(path, f"must be a finite number, got {value!r}")
+        return v
+
+    def vector(self, value, n: int, path: tuple) -> tuple[float, ...]:
+        if not isinstance(value, list) or len(value) != n:
+            self.fail(path, f"must be a list of {n} numbers, got {_show(value)}")
+        return tuple(self.number(v, path + (i,)) for i, v in enumerate(value))
+
+    def quaternion(self, value, path: tuple) -> tuple[float, ...]:
+        q = self.vector(value, 4, path)
+        norm = math.sqrt(sum(v * v for v in q))
+        if abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE:
+            self.fail(path, f"must be a unit quaternion [w, x, y, z], got {list(q)} (norm {norm:.6g})")
+        if abs(norm - 1.0) > 1e-12:  # leave exact round-trip values alone
+            q = tuple(v / norm for v in q)
+        return q
+
+    def flag(self, value, path: tuple) -> bool:
+        if not isinstance(value, bool):
+            self.fail(path, f"must be true or false, got {_show(value)}")
+        return value
+
+    def name(self, value, path: tuple) -> str:
+        if not isinstance(value, str) or not value:
+            self.fail(path, f"must be a name, got {_show(value)}")
+        return value
+
+
+def _show(value) -> str:
+    if value is None:
+        return "nothing"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> PoseRead:
+    """Parse and validate pose YAML for ``skeleton``.
+
+    Args:
+        text: The YAML text.
+        skeleton: The skeleton the pose must fit (name, DOFs, effectors).
+        source: Name used in error messages (usually the file path).
+
+    Returns:
+        :class:`PoseRead`: the pose, and warnings about angles clamped into their limits.
+
+    Raises:
+        PoseError: naming ``source``, the line, the field and the bad value.
+    """
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        data = yaml.load(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line = f":{mark.line + 1}" if mark is not None else ""
+        problem = exc.problem or exc.context or "malformed YAML"
+        raise PoseError(f"{source}{line}: not valid YAML: {problem}") from None
+    except yaml.YAMLError as exc:
+        raise PoseError(f"{source}: not valid YAML: {exc}") from None
+    if node is None:
+        raise PoseError(f"{source}: empty file, expected a gsik pose (format: {POSE_FORMAT})")
+    lines: dict = {}
+    _key_lines(node, (), lines, source)
+    r = _Reader(source, lines)
+    top = r.mapping(data, (), _TOP_KEYS)
+
+    fmt = top["format"]
+    if isinstance(fmt, bool) or not isinstance(fmt, int):
+        r.fail(("format",), f"must be the whole number {POSE_FORMAT}, got {_show(fmt)}")
+    if fmt != POSE_FORMAT:
+        newer = " (written by a newer gsik?)" if fmt > POSE_FORMAT else ""
+        r.fail(("format",), f"unsupported pose format {fmt}{newer}; this gsik reads format {POSE_FORMAT}")
+
+    name = r.name(top["skeleton"], ("skeleton",))
+    if name != skeleton.name:
+        r.fail(("skeleton",), f"pose is for skeleton {name!r}, but the skeleton is {skeleton.name!r}")
+
+    root = r.name(top["root"], ("root",))
+    if root not in skeleton.joint_names and root not in skeleton.site_names:
+        r.fail(("root",), f"unknown root {root!r}; valid: {choices(skeleton.effector_sites)} "
+                          f"(or any joint or site: {choices(skeleton.joint_names + skeleton.site_names)})")
+
+    rt = r.mapping(top["root_transform"], ("root_transform",), _TRANSFORM_KEYS)
+    root_position = r.vector(rt["position"], 3, ("root_transform", "position"))
+    root_orientation = r.quaternion(rt["orientation"], ("root_transform", "orientation"))
+
+    joints_in = top["joints"]
+    if not isinstance(joints_in, dict):
+        r.fail(("joints",), f"must be a mapping of DOF name to angle [rad], got {_show(joints_in)}")
+    warnings = []
+    for key in joints_in:
+        if key not in skeleton.dof_names:
+            r.fail(("joints", key), f"unknown joint {key!r}; valid: {choices(skeleton.dof_names)}")
+    missing = [n for n in skeleton.dof_names if n not in joints_in]
+    if missing:
+        r.fail(("joints",), f"missing angle(s) for {choices(missing)}")
+    joints = {}
+    for i, dof in enumerate(skeleton.dof_names):
+        v = r.number(joints_in[dof], ("joints", dof))
+        lo, hi = float(skeleton.lower[i]), float(skeleton.upper[i])
+        if v < lo - LIMIT_TOLERANCE or v > hi + LIMIT_TOLERANCE:
+            clamped = min(max(v, lo), hi)
+            line = lines.get(("joints", dof))
+            warnings.append(f"{source}:{line}: joints.{dof}: angle {v!r} rad is outside its limits "
+                            f"[{lo!r}, {hi!r}]; clamped to {clamped!r}")
+            v = clamped
+        joints[dof] = v
+
+    effectors = tuple(n for n in skeleton.effector_sites if n != root)
+    targets_in = top["targets"]
+    if not isinstance(targets_in, dict):
+        r.fail(("targets",), f"must be a mapping of effector name to target, got {_show(targets_in)}")
+    for key in targets_in:
+        if key not in effectors:
+            why = " (it is the IK root)" if key == root else ""
+            r.fail(("targets", key), f"unknown effector {key!r}{why}; valid: {choices(effectors)}")
+    missing = [n for n in effectors if n not in targets_in]
+    if missing:
+        r.fail(("targets",), f"missing target(s) for {choices(missing)}")
+    targets = {}
+    for eff in effectors:
+        path = ("targets", eff)
+        t = r.mapping(targets_in[eff], path, _TARGET_KEYS[:2], _TARGET_KEYS[2:])
+        weight = r.number(t.get("weight", 1.0), path + ("weight",))
+        if weight < 0:
+            r.fail(path + ("weight",), f"must be >= 0, got {weight!r}")
+        targets[eff] = TargetPose(
+            position=r.vector(t["position"], 3, path + ("position",)),
+            orientation=r.quaternion(t["orientation"], path + ("orientation",)),
+            enabled=r.flag(t.get("enabled", True), path + ("enabled",)),
+            weight=weight,
+            position_only=r.flag(t.get("position_only", False), path + ("position_only",)),
+        )
+    pose = Pose(skeleton.name, root, root_position, root_orientation, joints, targets)
+    return PoseRead(pose, tuple(warnings))
+
+
+def read_pose(path: str | os.PathLike, skeleton: Skeleton) -> PoseRead:
+    """Read and validate a pose file for ``skeleton``.
+
+    Raises:
+        GsikFileError: the file cannot be read.
+        PoseError: the file is not a valid pose for ``skeleton`` (see the module docstring).
+    """
+    return pose_from_yaml(read_text(path, "pose file"), skeleton, os.fspath(path))
+
+
+# -- writing -----------------------------------------------------------------
+
+def _num(x: float) -> str:
+    """The shortest text YAML reads back as exactly ``x`` (PyYAML needs a dot before an exponent)."""
+    text = repr(float(x))
+    if "e" in text and "." not in text:
+        text = text.replace("e", ".0e")
+    return text
+
+
+def _list(values) -> str:
+    return "[" + ", ".join(_num(v) for v in values) + "]"
+
+
+def _name(text: str) -> str:
+    """A YAML key or value for a name: plain when it reads back as the same string, else quoted."""
+    plain = yaml.safe_load(f"{text}: 0") if text else None
+    if isinstance(plain, dict) and list(plain) == [text]:
+        return text
+    return yaml.safe_dump(text, default_style='"').strip().removesuffix("...").strip()
+
+
+def pose_to_yaml(pose: Pose) -> str:
+    """The YAML text of ``pose`` (the format of the module docstring)."""
+    out = [
+        "# gsik pose (format documented in gsik/pose.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
+        f"format: {POSE_FORMAT}",
+        f"skeleton: {_name(pose.skeleton)}",
+        f"root: {_name(pose.root)}",
+        "root_transform:",
+        f"  position: {_list(pose.root_position)}",
+        f"  orientation: {_list(pose.root_orientation)}",
+        "joints:",
+    ]
+    out += [f"  {_name(n)}: {_num(v)}" for n, v in pose.joints.items()]
+    out.append("targets:" if pose.targets else "targets: {}")
+    for n, t in pose.targets.items():
+        out += [
+            f"  {_name(n)}:",
+            f"    position: {_list(t.position)}",
+            f"    orientation: {_list(t.orientation)}",
+            f"    enabled: {'true' if t.enabled else 'false'}",
+            f"    weight: {_num(t.weight)}",
+            f"    position_only: {'true' if t.position_only else 'false'}",
+        ]
+    return "\n".join(out) + "\n"
+
+
+def write_pose(path: str | os.PathLike, pose: Pose) -> None:
+    """Write ``pose`` to ``path`` atomically (temporary file, fsync, rename).
+
+    Raises:
+        GsikFileError: the file cannot be written; an existing file is left untouched.
+    """
+    if not isinstance(pose, Pose):
+        raise PoseError(f"write_pose needs a Pose, got {type(pose).__name__}")
+    atomic_write_text(path, pose_to_yaml(pose))
