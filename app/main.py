@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -52,8 +53,8 @@ def main(argv: list[str] | None = None) -> int:
                 return 1
             for w in warnings:
                 print(f"gsik-studio: warning: {w}", file=sys.stderr)
-        settings = QtCore.QSettings(QtCore.QSettings.IniFormat, QtCore.QSettings.UserScope, "gsik", "screenshot")
-        settings.clear()
+        scratch = tempfile.TemporaryDirectory(prefix="gsik-studio-")
+        settings = QtCore.QSettings(os.path.join(scratch.name, "settings.ini"), QtCore.QSettings.IniFormat)
         window = MainWindow(doc, settings=settings)
         window.resize(width, height)
         window.show()
@@ -65,6 +66,7 @@ def main(argv: list[str] | None = None) -> int:
         ok = window.save_screenshot(args.screenshot)
         window.doc.history.set_clean()
         window.close()
+        scratch.cleanup()
         if not ok:
             print(f"gsik-studio: could not write {args.screenshot}", file=sys.stderr)
             return 1

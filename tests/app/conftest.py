@@ -1,0 +1,109 @@
+"""Fixtures for the studio's tests.
+
+The model tests need no display. The GUI tests need a real X server (pyvistaqt's
+``QtInteractor`` needs OpenGL; Qt's ``offscreen`` platform cannot give it one), so
+this file starts its own ``Xvfb`` on a free display number the first time a test
+asks for the Qt application, and points ``DISPLAY`` at it. ``xvfb-run`` is not
+needed. If the ``Xvfb`` program is missing the GUI tests are skipped, saying so.
+
+Xvfb is started with ``-terminate``: it exits by itself when its last client (this
+test process) disconnects, so it never outlives the tests, and it is never killed
+under a live Qt connection (which would make Qt abort the process).
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import shutil
+import subprocess
+import time
+
+import pytest
+
+SCREEN = "1600x1100x24"
+
+
+class _Xvfb:
+    def __init__(self):
+        self.process: subprocess.Popen | None = None
+        self.display: str | None = None
+        self.error: str | None = None
+
+    def start(self) -> None:
+        exe = shutil.which("Xvfb")
+        if exe is None:
+            self.error = "Xvfb is not installed (Debian: apt-get install xvfb); the GUI tests need an X server"
+            return
+        read_fd, write_fd = os.pipe()
+        try:
+            self.process = subprocess.Popen(
+                [exe, "-displayfd", str(write_fd), "-screen", "0", SCREEN, "-nolisten", "tcp", "-terminate"],
+                pass_fds=(write_fd,), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        finally:
+            os.close(write_fd)
+        data = b""
+        deadline = time.monotonic() + 20.0
+        try:
+            while not data.endswith(b"\n") and time.monotonic() < deadline:
+                ready, _, _ = select.select([read_fd], [], [], 0.2)
+                if ready:
+                    chunk = os.read(read_fd, 64)
+                    if not chunk:
+                        break
+                    data += chunk
+                elif self.process.poll() is not None:
+                    break
+        finally:
+            os.close(read_fd)
+        if not data.strip().isdigit():
+            err = b""
+            if self.process.poll() is not None and self.process.stderr is not None:
+                err = self.process.stderr.read()[-500:]
+            self.stop()
+            self.error = f"Xvfb did not start: {err.decode(errors='replace').strip() or 'no display number'}"
+            return
+        self.display = ":" + data.decode().strip()
+
+    def stop(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+        self.process = None
+
+
+_xvfb = _Xvfb()
+
+
+@pytest.fixture(scope="session")
+def x_display():
+    """The display of a private Xvfb server (started once per test session)."""
+    if _xvfb.display is None and _xvfb.error is None:
+        _xvfb.start()
+    if _xvfb.display is None:
+        pytest.skip(_xvfb.error or "no X server")
+    os.environ["DISPLAY"] = _xvfb.display
+    os.environ["QT_QPA_PLATFORM"] = "xcb"
+    os.environ.pop("WAYLAND_DISPLAY", None)
+    yield _xvfb.display
+    from PySide6 import QtWidgets
+
+    if QtWidgets.QApplication.instance() is None:
+        _xvfb.stop()  # nobody connected: stop it now; otherwise -terminate ends it when we disconnect
+
+
+@pytest.fixture(scope="session")
+def qapp_args(x_display):
+    """pytest-qt makes its QApplication from these: depending on x_display starts Xvfb first."""
+    return ["gsik-studio-tests"]
+
+
+@pytest.fixture()
+def studio_settings(tmp_path):
+    """An isolated QSettings (an INI file in tmp_path), so tests never touch the user's settings."""
+    from PySide6 import QtCore
+
+    return QtCore.QSettings(str(tmp_path / "studio.ini"), QtCore.QSettings.IniFormat)
