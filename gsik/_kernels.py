@@ -31,28 +31,30 @@ CONVERGED, STALLED, BUDGET_EXHAUSTED = 0, 1, 2
 
 
 @njit(cache=True)
-def rotvec_from_matrix(R):
-    """Log map: rotation vector (3,) [rad] of a rotation matrix (3, 3), accurate at every angle."""
-    out = np.empty(3)
+def log_map_into(R, out, off):
+    """Write the rotation vector [rad] of rotation matrix ``R`` (3, 3) into ``out[off:off + 3]``.
+
+    Accurate at every angle: atan2 (not acos, which loses half the digits
+    near 0 and pi), and past 120 degrees the axis from the symmetric part.
+    """
     wx = R[2, 1] - R[1, 2]
     wy = R[0, 2] - R[2, 0]
     wz = R[1, 0] - R[0, 1]
     s = 0.5 * math.sqrt(wx * wx + wy * wy + wz * wz)  # sin(angle)
     c = 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)  # cos(angle)
-    # atan2, not acos: acos loses half the digits near 0 and pi.
     angle = math.atan2(s, c)
     if angle < 1e-6:
-        out[0] = 0.5 * wx
-        out[1] = 0.5 * wy
-        out[2] = 0.5 * wz
-        return out
+        out[off] = 0.5 * wx
+        out[off + 1] = 0.5 * wy
+        out[off + 2] = 0.5 * wz
+        return
     if c > -0.5:
         f = angle / (2.0 * s)
-        out[0] = wx * f
-        out[1] = wy * f
-        out[2] = wz * f
-        return out
-    # Past 120 degrees the antisymmetric part shrinks; the symmetric part minus c I is (1 - c) a a^T exactly.
+        out[off] = wx * f
+        out[off + 1] = wy * f
+        out[off + 2] = wz * f
+        return
+    # (R + R^T) / 2 - c I = (1 - c) a a^T exactly; take its largest column.
     i = 0
     best = -1.0
     for k in range(3):
@@ -61,13 +63,22 @@ def rotvec_from_matrix(R):
             best = mk
             i = k
     norm = math.sqrt(max(best * (1.0 - c), 1e-300))
+    dot = 0.0
     for k in range(3):
-        mki = 0.5 * (R[k, i] + R[i, k]) - (c if k == i else 0.0)
-        out[k] = mki / norm
-    if out[0] * wx + out[1] * wy + out[2] * wz < 0.0:
+        a = (0.5 * (R[k, i] + R[i, k]) - (c if k == i else 0.0)) / norm
+        out[off + k] = a
+        dot += a * (wx if k == 0 else (wy if k == 1 else wz))
+    if dot < 0.0:
         angle = -angle
     for k in range(3):
-        out[k] *= angle
+        out[off + k] *= angle
+
+
+@njit(cache=True)
+def rotvec_from_matrix(R):
+    """Log map: rotation vector (3,) [rad] of a rotation matrix (3, 3)."""
+    out = np.empty(3)
+    log_map_into(R, out, 0)
     return out
 
 
@@ -78,82 +89,87 @@ def forward_kinematics(parent, offset, rotation, axis, dof, q, root, W, R, p):
     A root of -1 leaves the skeleton where its definition puts it.
     """
     n = parent.shape[0]
-    L = np.empty((3, 3))
     for i in range(n):
         d = dof[i]
+        k = parent[i]
         if d >= 0:
             ax = axis[i, 0]
             ay = axis[i, 1]
             az = axis[i, 2]
-            s = math.sin(q[d])
-            c = math.cos(q[d])
-            t = 1.0 - c
-            # Rodrigues, then the frame's fixed rotation in front of it.
-            r00 = t * ax * ax + c
-            r01 = t * ax * ay - s * az
-            r02 = t * ax * az + s * ay
-            r10 = t * ax * ay + s * az
-            r11 = t * ay * ay + c
-            r12 = t * ay * az - s * ax
-            r20 = t * ax * az - s * ay
-            r21 = t * ay * az + s * ax
-            r22 = t * az * az + c
-            for a in range(3):
-                f0 = rotation[i, a, 0]
-                f1 = rotation[i, a, 1]
-                f2 = rotation[i, a, 2]
-                L[a, 0] = f0 * r00 + f1 * r10 + f2 * r20
-                L[a, 1] = f0 * r01 + f1 * r11 + f2 * r21
-                L[a, 2] = f0 * r02 + f1 * r12 + f2 * r22
+            sn = math.sin(q[d])
+            cs = math.cos(q[d])
+            t = 1.0 - cs
+            # Rodrigues for the DOF's rotation.
+            r00 = t * ax * ax + cs
+            r01 = t * ax * ay - sn * az
+            r02 = t * ax * az + sn * ay
+            r10 = t * ax * ay + sn * az
+            r11 = t * ay * ay + cs
+            r12 = t * ay * az - sn * ax
+            r20 = t * ax * az - sn * ay
+            r21 = t * ay * az + sn * ax
+            r22 = t * az * az + cs
         else:
-            for a in range(3):
-                for b in range(3):
-                    L[a, b] = rotation[i, a, b]
-        k = parent[i]
-        if k < 0:
-            for a in range(3):
+            r00 = r11 = r22 = 1.0
+            r01 = r02 = r10 = r12 = r20 = r21 = 0.0
+        # parent_from_frame rotation = fixed rotation @ DOF rotation; world = R[parent] @ that.
+        for a in range(3):
+            if k < 0:
+                m0 = rotation[i, a, 0]
+                m1 = rotation[i, a, 1]
+                m2 = rotation[i, a, 2]
                 p[i, a] = offset[i, a]
-                for b in range(3):
-                    R[i, a, b] = L[a, b]
-        else:
-            for a in range(3):
+            else:
+                m0 = R[k, a, 0] * rotation[i, 0, 0] + R[k, a, 1] * rotation[i, 1, 0] + R[k, a, 2] * rotation[i, 2, 0]
+                m1 = R[k, a, 0] * rotation[i, 0, 1] + R[k, a, 1] * rotation[i, 1, 1] + R[k, a, 2] * rotation[i, 2, 1]
+                m2 = R[k, a, 0] * rotation[i, 0, 2] + R[k, a, 1] * rotation[i, 1, 2] + R[k, a, 2] * rotation[i, 2, 2]
                 p[i, a] = p[k, a] + R[k, a, 0] * offset[i, 0] + R[k, a, 1] * offset[i, 1] + R[k, a, 2] * offset[i, 2]
-                for b in range(3):
-                    R[i, a, b] = R[k, a, 0] * L[0, b] + R[k, a, 1] * L[1, b] + R[k, a, 2] * L[2, b]
+            R[i, a, 0] = m0 * r00 + m1 * r10 + m2 * r20
+            R[i, a, 1] = m0 * r01 + m1 * r11 + m2 * r21
+            R[i, a, 2] = m0 * r02 + m1 * r12 + m2 * r22
     if root < 0:
         return
     # world_from_model = W @ inv(model_from_root), applied to every frame.
-    G = np.empty((3, 3))
-    g = np.empty(3)
-    for a in range(3):
-        for b in range(3):
-            G[a, b] = W[a, 0] * R[root, b, 0] + W[a, 1] * R[root, b, 1] + W[a, 2] * R[root, b, 2]
-    for a in range(3):
-        g[a] = W[a, 3] - (G[a, 0] * p[root, 0] + G[a, 1] * p[root, 1] + G[a, 2] * p[root, 2])
+    g00 = W[0, 0] * R[root, 0, 0] + W[0, 1] * R[root, 0, 1] + W[0, 2] * R[root, 0, 2]
+    g01 = W[0, 0] * R[root, 1, 0] + W[0, 1] * R[root, 1, 1] + W[0, 2] * R[root, 1, 2]
+    g02 = W[0, 0] * R[root, 2, 0] + W[0, 1] * R[root, 2, 1] + W[0, 2] * R[root, 2, 2]
+    g10 = W[1, 0] * R[root, 0, 0] + W[1, 1] * R[root, 0, 1] + W[1, 2] * R[root, 0, 2]
+    g11 = W[1, 0] * R[root, 1, 0] + W[1, 1] * R[root, 1, 1] + W[1, 2] * R[root, 1, 2]
+    g12 = W[1, 0] * R[root, 2, 0] + W[1, 1] * R[root, 2, 1] + W[1, 2] * R[root, 2, 2]
+    g20 = W[2, 0] * R[root, 0, 0] + W[2, 1] * R[root, 0, 1] + W[2, 2] * R[root, 0, 2]
+    g21 = W[2, 0] * R[root, 1, 0] + W[2, 1] * R[root, 1, 1] + W[2, 2] * R[root, 1, 2]
+    g22 = W[2, 0] * R[root, 2, 0] + W[2, 1] * R[root, 2, 1] + W[2, 2] * R[root, 2, 2]
+    rx = p[root, 0]
+    ry = p[root, 1]
+    rz = p[root, 2]
+    gx = W[0, 3] - (g00 * rx + g01 * ry + g02 * rz)
+    gy = W[1, 3] - (g10 * rx + g11 * ry + g12 * rz)
+    gz = W[2, 3] - (g20 * rx + g21 * ry + g22 * rz)
     for i in range(n):
         px = p[i, 0]
         py = p[i, 1]
         pz = p[i, 2]
-        for a in range(3):
-            p[i, a] = g[a] + G[a, 0] * px + G[a, 1] * py + G[a, 2] * pz
+        p[i, 0] = gx + g00 * px + g01 * py + g02 * pz
+        p[i, 1] = gy + g10 * px + g11 * py + g12 * pz
+        p[i, 2] = gz + g20 * px + g21 * py + g22 * pz
         for b in range(3):
             c0 = R[i, 0, b]
             c1 = R[i, 1, b]
             c2 = R[i, 2, b]
-            for a in range(3):
-                R[i, a, b] = G[a, 0] * c0 + G[a, 1] * c1 + G[a, 2] * c2
+            R[i, 0, b] = g00 * c0 + g01 * c1 + g02 * c2
+            R[i, 1, b] = g10 * c0 + g11 * c1 + g12 * c2
+            R[i, 2, b] = g20 * c0 + g21 * c1 + g22 * c2
 
 
 @njit(cache=True)
-def effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err):
-    """Error vector ``e`` (6m,) (target minus current) and per-effector errors ``err`` (m, 2).
+def effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err, M):
+    """Error vector ``e`` (6m,) (target minus current) and per-effector errors ``err`` (2, m).
 
-    Returns the weighted cost ``0.5 * sum(row_w * e**2)``. ``err[k]`` holds
-    the position error [m] and orientation error [rad].
+    Returns the weighted cost ``0.5 * sum(row_w * e**2)``. ``err`` (2, m)
+    holds position errors [m] then orientation errors [rad]. ``M`` (3, 3) is scratch.
     """
     m = eff_frame.shape[0]
     cost = 0.0
-    M = np.empty((3, 3))
     for k in range(m):
         f = eff_frame[k]
         for a in range(3):
@@ -162,13 +178,9 @@ def effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err):
         for a in range(3):
             for b in range(3):
                 M[a, b] = target_R[k, a, 0] * R[f, b, 0] + target_R[k, a, 1] * R[f, b, 1] + target_R[k, a, 2] * R[f, b, 2]
-        w = rotvec_from_matrix(M)
-        for a in range(3):
-            e[6 * k + 3 + a] = w[a]
-        ep = math.sqrt(e[6 * k] ** 2 + e[6 * k + 1] ** 2 + e[6 * k + 2] ** 2)
-        eo = math.sqrt(w[0] ** 2 + w[1] ** 2 + w[2] ** 2)
-        err[k, 0] = ep
-        err[k, 1] = eo
+        log_map_into(M, e, 6 * k + 3)
+        err[0, k] = math.sqrt(e[6 * k] ** 2 + e[6 * k + 1] ** 2 + e[6 * k + 2] ** 2)
+        err[1, k] = math.sqrt(e[6 * k + 3] ** 2 + e[6 * k + 4] ** 2 + e[6 * k + 5] ** 2)
         for r in range(6):
             cost += 0.5 * row_w[k, r] * e[6 * k + r] ** 2
     return cost
@@ -203,12 +215,61 @@ def jacobian(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, J):
 
 
 @njit(cache=True)
-def normal_equations(J, e, row_w, eff_dofs, eff_n, A, b):
-    """``A = J^T W J`` and ``b = J^T W e``, touching only the DOFs each effector depends on."""
+def linear_system(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, e, row_w, A, b, v):
+    """``A = J^T W J`` and ``b = J^T W e`` straight from the frames, never forming J.
+
+    Same numbers as :func:`jacobian` then :func:`normal_equations`; each
+    effector's Jacobian block is built compactly, (dofs on its path, 6),
+    so the products run over contiguous memory. ``v`` (2, n_dofs, 6) is scratch.
+    """
+    A[:, :] = 0.0
+    b[:] = 0.0
+    m = eff_frame.shape[0]
+    for k in range(m):
+        f = eff_frame[k]
+        n_k = eff_n[k]
+        for t in range(n_k):
+            d = eff_dofs[k, t]
+            g = dof_frame[d]
+            s = sign[k, d]
+            rx = s * (R[g, 0, 0] * axis[g, 0] + R[g, 0, 1] * axis[g, 1] + R[g, 0, 2] * axis[g, 2])
+            ry = s * (R[g, 1, 0] * axis[g, 0] + R[g, 1, 1] * axis[g, 1] + R[g, 1, 2] * axis[g, 2])
+            rz = s * (R[g, 2, 0] * axis[g, 0] + R[g, 2, 1] * axis[g, 1] + R[g, 2, 2] * axis[g, 2])
+            dx = p[f, 0] - p[g, 0]
+            dy = p[f, 1] - p[g, 1]
+            dz = p[f, 2] - p[g, 2]
+            v[0, t, 0] = ry * dz - rz * dy
+            v[0, t, 1] = rz * dx - rx * dz
+            v[0, t, 2] = rx * dy - ry * dx
+            v[0, t, 3] = rx
+            v[0, t, 4] = ry
+            v[0, t, 5] = rz
+            acc = 0.0
+            for r in range(6):
+                w = row_w[k, r] * v[0, t, r]
+                v[1, t, r] = w
+                acc += w * e[6 * k + r]
+            b[d] += acc
+        for t in range(n_k):
+            d1 = eff_dofs[k, t]
+            for u in range(t, n_k):
+                d2 = eff_dofs[k, u]
+                acc = (v[1, t, 0] * v[0, u, 0] + v[1, t, 1] * v[0, u, 1] + v[1, t, 2] * v[0, u, 2]
+                       + v[1, t, 3] * v[0, u, 3] + v[1, t, 4] * v[0, u, 4] + v[1, t, 5] * v[0, u, 5])
+                A[d1, d2] += acc
+                if d1 != d2:
+                    A[d2, d1] += acc
+
+
+@njit(cache=True)
+def normal_equations(J, e, row_w, eff_dofs, eff_n, A, b, wj):
+    """``A = J^T W J`` and ``b = J^T W e``, touching only the DOFs each effector depends on.
+
+    ``wj`` (6, n_dofs) is scratch.
+    """
     A[:, :] = 0.0
     b[:] = 0.0
     m = eff_dofs.shape[0]
-    wj = np.empty((6, J.shape[1]))
     for k in range(m):
         n_k = eff_n[k]
         for t in range(n_k):
@@ -231,14 +292,33 @@ def normal_equations(J, e, row_w, eff_dofs, eff_n, A, b):
                     A[d2, d1] += acc
 
 
+@njit(cache=True, inline="always")
+def _row_residual(A, b, x, i, n):
+    """``b[i] - A[i] @ x`` with four accumulators: the add chain, not the multiplies, bounds a sweep."""
+    r0 = b[i]
+    r1 = 0.0
+    r2 = 0.0
+    r3 = 0.0
+    j = 0
+    while j + 4 <= n:
+        r0 -= A[i, j] * x[j]
+        r1 -= A[i, j + 1] * x[j + 1]
+        r2 -= A[i, j + 2] * x[j + 2]
+        r3 -= A[i, j + 3] * x[j + 3]
+        j += 4
+    while j < n:
+        r0 -= A[i, j] * x[j]
+        j += 1
+    return (r0 + r1) + (r2 + r3)
+
+
 @njit(cache=True)
 def _projected_residual(A, b, x, lo, hi):
     """``|b - A x|`` over the unknowns not held at a bound by an outward-pointing residual."""
     res2 = 0.0
-    for i in range(b.shape[0]):
-        r = b[i]
-        for j in range(b.shape[0]):
-            r -= A[i, j] * x[j]
+    n = b.shape[0]
+    for i in range(n):
+        r = _row_residual(A, b, x, i, n)
         if not ((x[i] <= lo[i] and r < 0.0) or (x[i] >= hi[i] and r > 0.0)):
             res2 += r * r
     return math.sqrt(res2)
@@ -262,9 +342,7 @@ def projected_gauss_seidel(A, b, x, lo, hi, sweeps, res_tol, upd_tol, x_prev, st
         res2 = 0.0
         upd2 = 0.0
         for i in range(n):
-            r = b[i]
-            for j in range(n):
-                r -= A[i, j] * x[j]
+            r = _row_residual(A, b, x, i, n)
             xi = x[i] + r / A[i, i]
             if xi < lo[i]:
                 xi = lo[i]
@@ -300,14 +378,14 @@ def projected_gauss_seidel(A, b, x, lo, hi, sweeps, res_tol, upd_tol, x_prev, st
 def _finish_errors(row_w, err, pos_tol, ori_tol):
     """Zero the errors of unused rows (no target, position only); True if all are within tolerance."""
     ok = True
-    for k in range(err.shape[0]):
+    for k in range(err.shape[1]):
         if row_w[k, 0] <= 0.0:
-            err[k, 0] = 0.0
-        elif err[k, 0] > pos_tol:
+            err[0, k] = 0.0
+        elif err[0, k] > pos_tol:
             ok = False
         if row_w[k, 3] <= 0.0:
-            err[k, 1] = 0.0
-        elif err[k, 1] > ori_tol:
+            err[1, k] = 0.0
+        elif err[1, k] > ori_tol:
             ok = False
     return ok
 
@@ -335,41 +413,86 @@ def _bounds(q, lower, upper, max_step, lo, hi):
 
 
 @njit(cache=True)
-def _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err):
+def _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err, M):
     parent, offset, rotation, axis, dof, dof_frame, lower, upper, eff_frame, sign, eff_dofs, eff_n = model
     forward_kinematics(parent, offset, rotation, axis, dof, q, root, W, R, p)
-    return effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err)
+    return effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err, M)
+
+
+def workspace_size(n_frames: int, n_dofs: int, n_effectors: int) -> int:
+    """Length of the float scratch buffer :func:`step` and :func:`solve` carve up (see :func:`_carve`)."""
+    n, m = n_dofs, n_effectors
+    return 6 * m + 6 * m * n + 2 * n * n + 7 * n + 12 * n_frames + 2 * m + 9 + 12 * n
 
 
 @njit(cache=True)
-def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R, p, err, stats):
+def _carve(work, n_frames, n, m):
+    """Views into the scratch buffer: no allocation in the per-frame path."""
+    o = 0
+    e = work[o:o + 6 * m]
+    o += 6 * m
+    J = work[o:o + 6 * m * n].reshape((6 * m, n))
+    o += 6 * m * n
+    A = work[o:o + n * n].reshape((n, n))
+    o += n * n
+    Al = work[o:o + n * n].reshape((n, n))
+    o += n * n
+    b = work[o:o + n]
+    lo = work[o + n:o + 2 * n]
+    hi = work[o + 2 * n:o + 3 * n]
+    x_prev = work[o + 3 * n:o + 4 * n]
+    q_new = work[o + 4 * n:o + 5 * n]
+    x2 = work[o + 5 * n:o + 6 * n]
+    zero = work[o + 6 * n:o + 7 * n]
+    o += 7 * n
+    R2 = work[o:o + 9 * n_frames].reshape((n_frames, 3, 3))
+    o += 9 * n_frames
+    p2 = work[o:o + 3 * n_frames].reshape((n_frames, 3))
+    o += 3 * n_frames
+    err2 = work[o:o + 2 * m].reshape((2, m))
+    o += 2 * m
+    M = work[o:o + 9].reshape((3, 3))
+    o += 9
+    v = work[o:o + 12 * n].reshape((2, n, 6))
+    return e, J, A, Al, b, lo, hi, x_prev, q_new, x2, zero, R2, p2, err2, M, v
+
+
+@njit(cache=True)
+def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R, p, err, stats, work):
     """One frame: linearise at ``q``, solve the damped normal equations by PGS, update ``q``.
 
     ``R``, ``p`` must hold the world frames at the incoming ``q``; on return
-    they hold the frames at the new ``q`` and ``err`` (m, 2) its errors.
+    they hold the frames at the new ``q`` and ``err`` (2, m) its errors.
     ``x`` (n_dofs,) carries the previous frame's step in (the warm start) and
     this frame's step out. ``lam_state`` (1,) is the adaptive damping carried
-    between frames.
+    between frames. ``work`` is scratch of :func:`workspace_size`.
     """
     parent, offset, rotation, axis, dof, dof_frame, lower, upper, eff_frame, sign, eff_dofs, eff_n = model
     n = q.shape[0]
-    m = eff_frame.shape[0]
+    e, J, A, Al, b, lo, hi, x_prev, q_new, x2, zero, R2, p2, err2, M, v = _carve(work, R.shape[0], n,
+                                                                                  eff_frame.shape[0])
     damping = settings[S_DAMPING]
     adaptive = settings[S_ADAPTIVE] > 0.0
-    e = np.empty(6 * m)
-    cost0 = effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err)
-    J = np.empty((6 * m, n))
-    jacobian(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, J)
-    A = np.empty((n, n))
-    b = np.empty(n)
-    normal_equations(J, e, row_w, eff_dofs, eff_n, A, b)
+    cost0 = effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err, M)
+    err2[:, :] = err
+    if _finish_errors(row_w, err2, settings[S_POS_TOL], settings[S_ORI_TOL]):
+        # Nothing to do: an idle frame costs one error evaluation.
+        err[:, :] = err2
+        x[:] = 0.0
+        stats[O_SWEEPS] = 0
+        stats[O_ITERATIONS] = 0
+        stats[O_RESIDUAL] = 0.0
+        stats[O_COST] = cost0
+        stats[O_STEP_NORM] = 0.0
+        stats[O_ACCEPTED] = 1.0
+        stats[O_STATUS] = CONVERGED
+        return
+    linear_system(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, e, row_w, A, b, v)
     lam = lam_state[0] if adaptive else damping
     for i in range(n):
         A[i, i] += lam
-    lo = np.empty(n)
-    hi = np.empty(n)
     _bounds(q, lower, upper, settings[S_MAX_STEP], lo, hi)
-    x_prev = x.copy()
+    x_prev[:] = x
     if settings[S_WARM] > 0.0:
         for i in range(n):
             x[i] = min(max(x[i], lo[i]), hi[i])
@@ -380,12 +503,8 @@ def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R
     else:
         projected_gauss_seidel(A, b, x, lo, hi, int(settings[S_SWEEPS]), settings[S_RES_TOL], settings[S_UPD_TOL],
                                x_prev, settings[S_STALL_TOL], stats)
-    q_new = np.empty(n)
     _add_clamped(q, x, lower, upper, q_new)
-    R2 = np.empty_like(R)
-    p2 = np.empty_like(p)
-    err2 = np.empty_like(err)
-    cost = _evaluate(model, q_new, root, W, target_p, target_R, row_w, R2, p2, e, err2)
+    cost = _evaluate(model, q_new, root, W, target_p, target_R, row_w, R2, p2, e, err2, M)
     accepted = 1.0
     if adaptive:
         # Levenberg-style safeguard: a step that raises the error is halved, then refused,
@@ -395,7 +514,7 @@ def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R
             for i in range(n):
                 x[i] *= 0.5
             _add_clamped(q, x, lower, upper, q_new)
-            cost = _evaluate(model, q_new, root, W, target_p, target_R, row_w, R2, p2, e, err2)
+            cost = _evaluate(model, q_new, root, W, target_p, target_R, row_w, R2, p2, e, err2, M)
             tries += 1
         if cost > cost0:
             accepted = 0.0
@@ -415,7 +534,10 @@ def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R
         R[:, :, :] = R2
         p[:, :] = p2
         err[:, :] = err2
-    step_norm = math.sqrt(np.sum(x * x))
+    step_norm = 0.0
+    for i in range(n):
+        step_norm += x[i] * x[i]
+    step_norm = math.sqrt(step_norm)
     stats[O_COST] = cost
     stats[O_STEP_NORM] = step_norm
     stats[O_ACCEPTED] = accepted
@@ -518,7 +640,7 @@ def bounded_solve(A, b, x, lo, hi, sweeps, stats):
 
 
 @njit(cache=True)
-def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations, R, p, err, stats):
+def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations, R, p, err, stats, work):
     """Levenberg-Marquardt over bounded steps until the targets are met or progress stops.
 
     Each iteration linearises, solves ``(J^T W J + lam I) x = J^T W e`` within
@@ -531,25 +653,15 @@ def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations
     parent, offset, rotation, axis, dof, dof_frame, lower, upper, eff_frame, sign, eff_dofs, eff_n = model
     n = q.shape[0]
     m = eff_frame.shape[0]
-    e = np.empty(6 * m)
-    J = np.empty((6 * m, n))
-    A = np.empty((n, n))
-    Al = np.empty((n, n))
-    b = np.empty(n)
-    lo = np.empty(n)
-    hi = np.empty(n)
-    x = np.zeros(n)
-    q_try = np.empty(n)
-    R2 = np.empty_like(R)
-    p2 = np.empty_like(p)
-    err2 = np.empty_like(err)
+    e, J, A, Al, b, lo, hi, x_prev, q_try, x, zero, R2, p2, err2, M, v = _carve(work, R.shape[0], n, m)
+    x[:] = 0.0
     pgs_stats = np.zeros(N_STATS)
     damping = settings[S_DAMPING]
     pos_tol = settings[S_POS_TOL]
     ori_tol = settings[S_ORI_TOL]
     lam = max(damping, 1e-3)
     sweeps = int(settings[S_SWEEPS])
-    cost = _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err)
+    cost = _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err, M)
     total_sweeps = 0
     status = BUDGET_EXHAUSTED
     it = 0
@@ -560,8 +672,7 @@ def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations
             break
         if it == max_iterations:
             break
-        jacobian(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, J)
-        normal_equations(J, e, row_w, eff_dofs, eff_n, A, b)
+        linear_system(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, e, row_w, A, b, v)
         _bounds(q, lower, upper, settings[S_MAX_STEP], lo, hi)
         accepted = False
         settled = False
@@ -573,7 +684,7 @@ def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations
             bounded_solve(Al, b, x, lo, hi, sweeps, pgs_stats)
             total_sweeps += int(pgs_stats[O_SWEEPS])
             _add_clamped(q, x, lower, upper, q_try)
-            c = _evaluate(model, q_try, root, W, target_p, target_R, row_w, R2, p2, e, err2)
+            c = _evaluate(model, q_try, root, W, target_p, target_R, row_w, R2, p2, e, err2, M)
             if c < cost:
                 accepted = True
                 settled = cost - c <= settings[S_SETTLE_TOL] * cost
@@ -589,7 +700,7 @@ def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations
             status = STALLED
             break
     # e and err must describe the final q (a refused trial overwrote them).
-    cost = _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err)
+    cost = _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err, M)
     _finish_errors(row_w, err, pos_tol, ori_tol)
     if status == STALLED and _finish_errors(row_w, err2, pos_tol, ori_tol):
         status = CONVERGED

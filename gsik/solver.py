@@ -231,7 +231,7 @@ class Solver:
             raise SolverError(f"world_from_root must be a finite (4, 4) transform, got shape {W.shape}")
         self._W = W
         self._targets: dict[str, Target] = {}
-        self._svec_for = None
+        self._args = None
         self._x = np.zeros(skeleton.n_dofs)
         self._lam = np.array([self._settings.damping])
         self._set_topology(skeleton.root)
@@ -260,6 +260,7 @@ class Solver:
                 self._q if q is None else q, root_frame, W)
 
     def _set_topology(self, root: str) -> None:
+        self._args = None
         self._skeleton = self._skeleton.with_root(root)
         self._topo: Topology = topology(self._skeleton, root)
         self._model = model_arrays(self._skeleton, self._topo)
@@ -267,8 +268,14 @@ class Solver:
         self._tp = np.zeros((m, 3))
         self._tR = np.tile(np.eye(3), (m, 1, 1))
         self._row_w = np.zeros((m, 6))
-        self._err = np.zeros((m, 2))
+        # q and the errors live in one buffer so a result copies them at once.
+        state = np.zeros(self._skeleton.n_dofs + 2 * m)
+        state[: self._skeleton.n_dofs] = self._q
+        self._state = state
+        self._q = state[: self._skeleton.n_dofs]
+        self._err = state[self._skeleton.n_dofs:].reshape(2, m)
         self._stats = np.zeros(_kernels.N_STATS)
+        self._work = np.zeros(_kernels.workspace_size(self._skeleton.n_frames, self._skeleton.n_dofs, m))
         self._refresh_frames()
         self._pack_targets()
 
@@ -328,6 +335,7 @@ class Solver:
     def configure(self, **changes) -> None:
         """Change settings by name (validated); unknown names raise :class:`SolverError`."""
         self._settings = self._make_settings(self._settings, changes)
+        self._args = None
         self._lam[0] = self._settings.damping
         self._pack_targets()
 
@@ -348,6 +356,7 @@ class Solver:
         if W.shape != (4, 4) or not np.all(np.isfinite(W)):
             raise SolverError(f"world_from_root must be a finite (4, 4) transform, got shape {W.shape}")
         self._W = W
+        self._args = None
         self._refresh_frames()
 
     def frame_transforms(self) -> np.ndarray:
@@ -414,27 +423,25 @@ class Solver:
         """
         if targets is not None:
             self.set_targets(targets)
-        st = self._stats
-        _kernels.step(self._model, self._topo.root_frame, self._W, self._tp, self._tR, self._row_w, self._q,
-                      self._x, self._lam, self._settings_vector(), self._R, self._p, self._err, st)
-        return self._result(st, st[_kernels.O_RESIDUAL], 1)
+        _kernels.step(*(self._args or self._step_args()))
+        return self._result(self._stats, _kernels.O_RESIDUAL, 1)
 
-    def _settings_vector(self) -> np.ndarray:
-        if self._svec_for is not self._settings:
-            self._svec = self._settings.vector()
-            self._svec_for = self._settings
-        return self._svec
+    def _step_args(self) -> tuple:
+        """The arguments of :func:`gsik._kernels.step`: persistent arrays, so the tuple is built once."""
+        if self._args is None:
+            self._args = (self._model, self._topo.root_frame, self._W, self._tp, self._tR, self._row_w, self._q,
+                          self._x, self._lam, self._settings.vector(), self._R, self._p, self._err, self._stats,
+                          self._work)
+        return self._args
 
-    def _result(self, st: np.ndarray, residual: float, attempts: int) -> SolveResult:
-        q = self._q.copy()
-        q.flags.writeable = False
-        pos = self._err[:, 0].copy()
-        pos.flags.writeable = False
-        ori = self._err[:, 1].copy()
-        ori.flags.writeable = False
-        return SolveResult(q, _STATUSES[int(st[_kernels.O_STATUS])], int(st[_kernels.O_ITERATIONS]),
-                           int(st[_kernels.O_SWEEPS]), float(residual), self._topo.effector_names, pos, ori,
-                           float(st[_kernels.O_STEP_NORM]), attempts)
+    def _result(self, st: np.ndarray, residual_index: int, attempts: int) -> SolveResult:
+        # q and the (2, m) errors share one buffer: one copy, three views the caller owns.
+        out = self._state.copy()
+        n, m = self._q.shape[0], self._err.shape[1]
+        stats = st.tolist()
+        return SolveResult(out[:n], _STATUSES[int(stats[_kernels.O_STATUS])], int(stats[_kernels.O_ITERATIONS]),
+                           int(stats[_kernels.O_SWEEPS]), stats[residual_index], self._topo.effector_names,
+                           out[n:n + m], out[n + m:], stats[_kernels.O_STEP_NORM], attempts)
 
     def solve(self, targets: Mapping[str, Target | None] | None = None, q0=None) -> SolveResult:
         """Solve to convergence (or best reach) from ``q0`` (default: the current angles).
@@ -473,7 +480,7 @@ class Solver:
         self._lam[0] = s.damping
         # Recompute frames and errors at the kept pose.
         self._solve_from(q, iterations=0)
-        return self._result(stats, stats[_kernels.O_COST], attempts)
+        return self._result(stats, _kernels.O_COST, attempts)
 
     def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
         s = self._settings
@@ -481,7 +488,7 @@ class Solver:
         stats = np.zeros(_kernels.N_STATS)
         _kernels.solve(self._model, self._topo.root_frame, self._W, self._tp, self._tR, self._row_w, self._q,
                        s.vector(sweeps=s.solve_sweeps), s.max_iterations if iterations is None else iterations,
-                       self._R, self._p, self._err, stats)
+                       self._R, self._p, self._err, stats, self._work)
         return stats
 
     def _solve_by_continuation(self, q0: np.ndarray, stages: int = 4) -> np.ndarray:
