@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik.errors import SolverError, choices
+from gsik.errors import SkeletonError, SolverError, choices
 from gsik.kinematics import world_frames
 from gsik.motion import Motion
 from gsik.rotations import transform
@@ -98,7 +98,7 @@ class TrackResult:
 def _clip_frame(clip_skeleton: Skeleton, name: str, what: str) -> int:
     try:
         return clip_skeleton.frame_of(name)
-    except Exception:
+    except SkeletonError:
         raise SolverError(f"the clip's skeleton {clip_skeleton.name!r} has no joint or site {name!r} for {what}; "
                           f"joints: {choices(clip_skeleton.joint_names)}; sites: {choices(clip_skeleton.site_names)}"
                           ) from None

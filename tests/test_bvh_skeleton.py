@@ -150,6 +150,14 @@ def test_export_of_the_biped_is_rooted_at_hips_with_exact_channels(biped):
     assert by_name["left_knee"].channels == ("Xrotation",)
     assert by_name["atlas"].channels == ("Xrotation", "Yrotation")
     np.testing.assert_allclose(by_name["left_knee"].offset, [0.0, 0.0, -42.0])  # centimetres by default
+    # The root channels carry the top joint's world pose: where the definition stands it by default...
+    np.testing.assert_allclose(clip.motion[0, :6], [0.0, 0.0, 97.97, 0.0, 0.0, 0.0], atol=1e-9)
+    # ... or where world_from_root pins the root.
+    W = np.eye(4)
+    W[:3, :3] = matrix_from_rotvec([0.0, 0.0, 0.5])
+    W[:3, 3] = [1.0, 2.0, 0.0]
+    moved = pose_to_bvh(biped, biped.rest, W, root="hips", units="m")
+    np.testing.assert_allclose(moved.motion[0, :6], [1.0, 2.0, 0.0, math.degrees(0.5), 0.0, 0.0], atol=1e-9)
     # The knee's channel is its angle in degrees, exactly.
     col = clip.channel_index("left_knee").start
     assert clip.motion[0, col] == pytest.approx(math.degrees(biped.rest[biped.dof_index("left_knee.x")]))

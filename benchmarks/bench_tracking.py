@@ -1,0 +1,92 @@
+"""Clip tracking benchmark: export a smooth biped clip to BVH, import it back, track it.
+
+The clip: 10 s at 30 fps of slow random sinusoids within the biped's limits
+(at most ~0.03 rad per frame), the hips travelling forward and swaying, the
+IK root alternating between the feet every 15 frames as in a walk. It is
+written as BVH text (centimetres, y up by default), parsed, imported as a
+skeleton, and its own effectors (head, pelvis, hands, feet; 6-DOF targets)
+are tracked with the IK root (``--root``, default the hips) pinned where the
+clip has it, for a few solver budgets. Figures exclude frame 0 (a full solve from the rest pose).
+
+Run: ``python benchmarks/bench_tracking.py [--frames 300] [--units cm] [--up y]``.
+Nothing here is asserted by the tests: timings on a shared machine are noisy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from gsik.bvh import format_bvh, parse_bvh
+from gsik.bvh_skeleton import import_bvh, motion_to_bvh
+from gsik.kinematics import world_frames
+from gsik.motion import Motion
+from gsik.rotations import matrix_from_rotvec, transform
+from gsik.skeleton import Skeleton
+from gsik.skeleton_io import load_skeleton
+from gsik.tracking import track_clip
+
+EFFECTORS = ("head", "pelvis", "left_hand", "right_hand", "left_foot", "right_foot")
+#: (sweeps per step, most steps per frame) to compare; the first is track_clip's default.
+BUDGETS = ((20, 5), (10, 3), (10, 1), (20, 10), (60, 10))
+
+
+def walk_like_motion(sk: Skeleton, n_frames: int, seed: int) -> Motion:
+    """Slow random sinusoids, hips travelling along +y, the root alternating between the feet."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n_frames) / 30.0
+    half = 0.5 * (sk.upper - sk.lower)
+    q = sk.rest + 0.25 * half * np.sin(2 * np.pi * rng.uniform(0.1, 0.4, sk.n_dofs) * t[:, None]
+                                       + rng.uniform(0, 2 * np.pi, sk.n_dofs))
+    q = np.clip(q, sk.lower, sk.upper)
+    roots = tuple(("right_foot", "left_foot")[(f // 15) % 2] for f in range(n_frames))
+    W = np.empty((n_frames, 4, 4))
+    for f in range(n_frames):
+        hips = transform(matrix_from_rotvec([0.0, 0.0, 0.2 * np.sin(t[f])]),
+                         [0.05 * np.sin(2 * t[f]), 0.8 * t[f], 0.95 + 0.02 * np.cos(4 * t[f])])
+        R, p = world_frames(sk, q[f], hips, "hips")
+        i = sk.frame_of(roots[f])
+        W[f] = transform(R[i], p[i])
+    return Motion(sk, q, roots, W, 1.0 / 30.0)
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--frames", type=int, default=300)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--units", choices=("cm", "m"), default="cm")
+    parser.add_argument("--up", choices=("y", "z"), default="y")
+    parser.add_argument("--root", default="hips", help="the IK root while tracking (hips, right_foot, ...)")
+    args = parser.parse_args(argv)
+
+    biped = load_skeleton("biped")
+    start = time.perf_counter()
+    text = format_bvh(motion_to_bvh(walk_like_motion(biped, args.frames, args.seed), units=args.units, up=args.up))
+    imported = import_bvh(parse_bvh(text))
+    print(f"clip: {args.frames} frames, {len(text) / 1024:.0f} KiB of BVH ({args.units}, {args.up} up), "
+          f"exported and re-imported in {time.perf_counter() - start:.2f} s; "
+          f"{imported.skeleton.n_dofs} DOF, detected scale {imported.scale} m/unit, up {imported.up}")
+    track_clip(imported.skeleton, imported.motion, effectors=EFFECTORS, root=args.root, steps_per_frame=1)  # JIT
+
+    header = (f"{'sweeps':>6} {'steps':>5} | {'mean pos':>9} {'max pos':>9} {'median':>9} | "
+              f"{'mean ori':>9} {'max ori':>9} | {'median t':>9} {'max t':>9} {'steps/fr':>8}")
+    tracked = [e for e in EFFECTORS if e != args.root]
+    print(f"\ntracking {', '.join(tracked)} with {args.root} pinned where the clip has it, frames 1..{args.frames - 1}")
+    print(header)
+    print("-" * len(header))
+    for sweeps, steps in BUDGETS:
+        result = track_clip(imported.skeleton, imported.motion, effectors=EFFECTORS, root=args.root, sweeps=sweeps,
+                            steps_per_frame=steps)
+        s = result.summary()
+        print(f"{sweeps:>6} {steps:>5} | {s.mean_position_error * 1e3:>6.3f} mm {s.max_position_error * 1e3:>6.3f} mm "
+              f"{s.median_position_error * 1e3:>6.3f} mm | {np.degrees(s.mean_orientation_error):>6.3f} deg "
+              f"{np.degrees(s.max_orientation_error):>6.3f} deg | {s.median_frame_seconds * 1e3:>6.3f} ms "
+              f"{s.max_frame_seconds * 1e3:>6.3f} ms {np.mean(result.steps[1:]):>8.2f}")
+    print("\n'median' is the median over frames of each frame's largest position error; times are the solver's "
+          "calls per frame (set root, set targets, steps).")
+
+
+if __name__ == "__main__":
+    main()
