@@ -21,9 +21,9 @@ from gsik.targets import Target
 #: Kenwright (2012), Table 1: one frame step of the biped, C++, Intel i7-2600 [ms].
 PAPER_TABLE_1_MS = {1: 0.01, 5: 0.042, 20: 0.11}
 
-#: The paper's plain method: fixed damping, exactly k sweeps, no safeguards.
-PAPER_SETTINGS = dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0, residual_tolerance=0.0,
-                      update_tolerance=0.0, stall_tolerance=0.0)
+#: The paper's plain method (fixed damping, no safeguards), doing exactly k sweeps.
+PAPER_SETTINGS = dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0, settle_tolerance=0.0,
+                      residual_tolerance=0.0, update_tolerance=0.0, stall_tolerance=0.0)
 
 
 def _targets(skeleton: Skeleton, q: np.ndarray, W: np.ndarray) -> dict[str, Target]:

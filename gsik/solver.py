@@ -62,6 +62,8 @@ class SolverSettings:
             are not on a limit exactly (Cholesky) and project: each step
             then solves its linear system exactly, where the paper's few
             sweeps solve it roughly. Off is the paper's method.
+
+    :meth:`paper` gives the paper's plain method.
         warm_start: Start each frame's sweeps from the previous frame's ``dq``.
         orientation_weight: Weight of orientation rows relative to position
             rows [m/rad].
@@ -82,7 +84,7 @@ class SolverSettings:
     max_step: float = 0.25
     adaptive_damping: bool = True
     settle_tolerance: float = 1e-6
-    subspace_minimization: bool = False
+    subspace_minimization: bool = True
     warm_start: bool = True
     orientation_weight: float = 0.5
     position_tolerance: float = 1e-4
@@ -110,6 +112,13 @@ class SolverSettings:
                 raise SolverError(f"setting {name} must be at least 1, got {getattr(self, name)!r}")
         if self.damping <= 0:
             raise SolverError(f"setting damping must be > 0 (it keeps J^T W J + delta I invertible), got {self.damping!r}")
+
+    @classmethod
+    def paper(cls, **overrides) -> SolverSettings:
+        """Kenwright's plain method: fixed delta, PGS sweeps only, no step limit or safeguards."""
+        fields_ = dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0, settle_tolerance=0.0)
+        fields_.update(overrides)
+        return cls(**fields_)
 
     def vector(self, sweeps: int | None = None) -> np.ndarray:
         """The settings the kernels read, as a float vector."""

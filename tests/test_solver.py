@@ -130,7 +130,8 @@ def test_warm_start_tracks_better_than_cold_start_for_the_same_sweeps(biped):
     W = gsik.Solver(biped, q0=Q[0]).world_from_root
     errors = {}
     for warm in (True, False):
-        solver = gsik.Solver(biped, q0=Q[0], sweeps=20, warm_start=warm, update_tolerance=0, residual_tolerance=0)
+        paper = gsik.SolverSettings.paper(sweeps=20, warm_start=warm, update_tolerance=0, residual_tolerance=0)
+        solver = gsik.Solver(biped, q0=Q[0], settings=paper)
         errors[warm] = np.median([solver.step(targets_at(biped, q, W)).max_position_error for q in Q[1:]])
     assert errors[True] < 0.5 * errors[False], errors
 
@@ -278,7 +279,7 @@ def test_initial_angles_are_checked(biped):
 
 def test_paper_mode_fixed_damping_still_tracks(biped):
     """adaptive_damping=False is the paper's plain method: fixed delta, k sweeps, warm start."""
-    solver = gsik.Solver(biped, adaptive_damping=False, max_step=0.0, sweeps=5)
+    solver = gsik.Solver(biped, settings=gsik.SolverSettings.paper(sweeps=5))
     targets = rest_targets(solver)
     targets["right_hand"] = Target(targets["right_hand"].position + [0.05, 0.1, 0.1])
     for _ in range(300):
