@@ -6,7 +6,7 @@ import pytest
 from gsik.kinematics import jacobian, topology, world_frames
 from gsik.rotations import rotvec_from_matrix
 
-from conftest import random_q
+from solver_helpers import random_q
 
 ROOTS = ["right_foot", "left_foot", "pelvis", "head", "left_hand", "hips", "left_knee"]
 

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 import gsik
 from gsik.skeleton_io import _bundled_dir
 
-from conftest import random_q
+from solver_helpers import random_q
 
 BIPED_YAML = (_bundled_dir() / "biped.yaml").read_text()
 

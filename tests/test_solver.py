@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 import gsik
 from gsik import Status, Target
 
-from conftest import random_q, targets_at
+from solver_helpers import random_q, targets_at
 
 
 @pytest.fixture
