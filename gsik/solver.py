@@ -91,7 +91,7 @@ class SolverSettings:
     orientation_tolerance: float = 1e-3
     max_iterations: int = 200
     solve_sweeps: int = 60
-    restarts: int = 8
+    restarts: int = 20
     seed: int = 0
 
     def __post_init__(self):
