@@ -15,7 +15,7 @@ import numpy as np
 
 from gsik.skeleton import Skeleton
 from gsik.skeleton_io import load_skeleton
-from gsik.solver import Solver, SolverSettings
+from gsik.solver import Solver
 from gsik.targets import Target
 
 #: Kenwright (2012), Table 1: one frame step of the biped, C++, Intel i7-2600 [ms].
@@ -28,15 +28,6 @@ PAPER_SETTINGS = dict(adaptive_damping=False, subspace_minimization=False, max_s
 
 def _targets(skeleton: Skeleton, q: np.ndarray, W: np.ndarray) -> dict[str, Target]:
     return {n: Target.from_transform(T) for n, T in skeleton.effector_poses(q, W).items()}
-
-
-def _median_us(fn: Callable[[], object], repeats: int) -> float:
-    times = np.empty(repeats)
-    for i in range(repeats):
-        t = time.perf_counter_ns()
-        fn()
-        times[i] = time.perf_counter_ns() - t
-    return float(np.median(times)) / 1e3
 
 
 def smooth_trajectory(skeleton: Skeleton, frames: int, seed: int, fps: float = 60.0,
@@ -80,22 +71,24 @@ def table_1(skeleton: Skeleton | None = None, repeats: int = 3000, seed: int = 0
             targets = _targets(sk, q_goal, solver.world_from_root)
             solver.set_targets(targets)
             q0 = solver.q
+            solver.step()  # compile before timing
 
-            def step():
+            args = solver._step_args()
+            public = np.empty(repeats)
+            kernel = np.empty(repeats)
+            # Every timed step starts from the same pose (restored untimed), so each does the full work.
+            for i in range(repeats + 100):
+                solver.set_q(q0)
+                t = time.perf_counter_ns()
                 solver.step()
-            # Hold the problem fixed: restore the start pose every 50 steps so sweeps keep doing work.
-            for _ in range(200):
-                step()
-            public = []
-            kernel = []
-            args = None
-            for block in range(max(1, repeats // 50)):
+                t_public = time.perf_counter_ns() - t
                 solver.set_q(q0)
-                public.append(_median_us(step, 50))
-                solver.set_q(q0)
-                args = solver._step_args()
-                kernel.append(_median_us(lambda: _kernels.step(*args), 50))
-            out.append(StepTiming(mode, k, float(np.median(public)), float(np.median(kernel))))
+                t = time.perf_counter_ns()
+                _kernels.step(*args)
+                t_kernel = time.perf_counter_ns() - t
+                if i >= 100:  # warm-up
+                    public[i - 100], kernel[i - 100] = t_public, t_kernel
+            out.append(StepTiming(mode, k, float(np.median(public)) / 1e3, float(np.median(kernel)) / 1e3))
     return out
 
 
