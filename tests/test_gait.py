@@ -48,8 +48,9 @@ def measures(walked):
 
 @pytest.mark.parametrize(
     "field, value",
-    [("n_steps", 0), ("n_steps", 2.5), ("n_steps", float("nan")), ("step_length", -0.1), ("step_height", float("nan")), ("cadence", 0.0),
-     ("fps", float("inf")), ("double_support", 0.9), ("arm_swing", "a lot"), ("pelvis_drop", True)],
+    [("n_steps", 0), ("n_steps", 2.5), ("n_steps", float("nan")), ("step_length", -0.1),
+     ("step_height", float("nan")), ("cadence", 0.0), ("fps", float("inf")), ("double_support", 0.9),
+     ("arm_swing", "a lot"), ("pelvis_drop", True)],
 )
 def test_walk_parameters_reject_bad_values_naming_the_field(field, value):
     with pytest.raises(GaitError, match=field):

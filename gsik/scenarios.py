@@ -1,0 +1,532 @@
+"""Pose scenarios and robustness runs (Kenwright 2012, sections IX.B and IX.C).
+
+A :class:`Scenario` is a set of effector targets, held still or animated for
+a few frames (the wave). The built-in ones for the biped are authored as
+joint angles and turned into targets by forward kinematics, so each has an
+exact solution; the ``impossible`` one puts every target far out of reach.
+:func:`random_scenario` makes seeded random poses the same way.
+
+:func:`run_scenario` runs one the way the interactive app does: from the rest
+pose, one warm-started :meth:`Solver.step` per frame, until the solver
+settles; then it keeps stepping for a while and records the largest joint
+change (a settled pose must not creep or oscillate) and whether any NaN
+appeared.
+
+Example:
+    >>> sk = gsik.load_skeleton("biped")
+    >>> report = run_scenario(builtin_scenario(sk, "kneel"))
+    >>> report.settled, report.max_position_error < 1e-3
+    (True, True)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from gsik.errors import GsikError, choices
+from gsik.kinematics import world_frames
+from gsik.motion import Motion
+from gsik.pose import Pose, TargetPose
+from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix, transform
+from gsik.skeleton import Skeleton
+from gsik.solver import Solver, SolverSettings, Status
+from gsik.targets import Target
+
+
+class ScenarioError(GsikError, ValueError):
+    """An unknown scenario, a skeleton a scenario does not fit, or bad run settings."""
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    """Effector targets for one skeleton, held or animated. Read-only arrays.
+
+    Attributes:
+        name: Short name (``"kneel"``).
+        description: One line for people.
+        skeleton: The skeleton, with ``root`` the IK root of the scenario.
+        effectors: (m,) the effectors with a target.
+        positions: (n_frames, m, 3) target world positions [m] per frame.
+        rotations: (n_frames, m, 3, 3) target world orientations per frame.
+        world_from_root: (4, 4) where the root is pinned.
+        reachable: False when the targets are out of reach on purpose.
+        frame_time: Seconds per animated frame [s].
+
+    Frame ``i`` of a run uses the targets of ``min(i, n_frames - 1)``: a held
+    pose has one frame.
+    """
+
+    name: str
+    description: str
+    skeleton: Skeleton
+    effectors: tuple[str, ...]
+    positions: np.ndarray
+    rotations: np.ndarray
+    world_from_root: np.ndarray
+    reachable: bool = True
+    frame_time: float = 1.0 / 60.0
+
+    def __post_init__(self):
+        P = np.array(self.positions, dtype=float)
+        R = np.array(self.rotations, dtype=float)
+        W = np.array(self.world_from_root, dtype=float)
+        m = len(self.effectors)
+        if P.ndim != 3 or P.shape[1:] != (m, 3) or P.shape[0] < 1:
+            raise ScenarioError(f"scenario {self.name!r}: positions must have shape (n_frames, {m}, 3), got {P.shape}")
+        if R.shape != P.shape[:2] + (3, 3):
+            raise ScenarioError(f"scenario {self.name!r}: rotations must have shape {P.shape[:2] + (3, 3)}, "
+                                f"got {R.shape}")
+        if W.shape != (4, 4):
+            raise ScenarioError(f"scenario {self.name!r}: world_from_root must have shape (4, 4), got {W.shape}")
+        if not (np.all(np.isfinite(P)) and np.all(np.isfinite(R)) and np.all(np.isfinite(W))):
+            raise ScenarioError(f"scenario {self.name!r}: targets must be finite")
+        for e in self.effectors:
+            if e not in self.skeleton.effector_names:
+                raise ScenarioError(f"scenario {self.name!r}: {e!r} is not an effector of root "
+                                    f"{self.skeleton.root!r}; effectors: {choices(self.skeleton.effector_names)}")
+        for a in (P, R, W):
+            a.flags.writeable = False
+        object.__setattr__(self, "positions", P)
+        object.__setattr__(self, "rotations", R)
+        object.__setattr__(self, "world_from_root", W)
+        object.__setattr__(self, "effectors", tuple(self.effectors))
+
+    @property
+    def root(self) -> str:
+        return self.skeleton.root
+
+    @property
+    def n_frames(self) -> int:
+        """Animated frames (1 for a held pose)."""
+        return self.positions.shape[0]
+
+    def targets_at(self, i: int) -> dict[str, Target]:
+        """The targets of frame ``i`` (held after the last animated frame)."""
+        k = min(max(int(i), 0), self.n_frames - 1)
+        return {e: Target(self.positions[k, j], self.rotations[k, j]) for j, e in enumerate(self.effectors)}
+
+
+# -- building scenarios ------------------------------------------------------------------
+
+
+def _rest_root(skeleton: Skeleton) -> np.ndarray:
+    """Where the rest pose, placed as the skeleton's definition places it, puts the root (4, 4)."""
+    R, p = world_frames(skeleton, skeleton.rest)
+    f = skeleton.frame_of(skeleton.root)
+    return transform(R[f], p[f])
+
+
+def angles(skeleton: Skeleton, values: Mapping[str, float]) -> np.ndarray:
+    """The rest pose with some DOFs set by name (n_dofs,) [rad].
+
+    Raises:
+        ScenarioError: an unknown DOF name (listing the valid ones) or an angle outside its limits.
+    """
+    q = skeleton.rest.copy()
+    for name, v in values.items():
+        if name not in skeleton.dof_names:
+            raise ScenarioError(f"skeleton {skeleton.name!r} has no degree of freedom {name!r}; "
+                                f"valid: {choices(skeleton.dof_names)}")
+        i = skeleton.dof_names.index(name)
+        if not skeleton.lower[i] <= v <= skeleton.upper[i]:
+            raise ScenarioError(f"angle {name} = {v!r} rad is outside its limits "
+                                f"[{skeleton.lower[i]:.6g}, {skeleton.upper[i]:.6g}]")
+        q[i] = v
+    return q
+
+
+def scenario_from_angles(skeleton: Skeleton, name: str, description: str, q_frames, root: str | None = None,
+                         frame_time: float = 1.0 / 60.0) -> Scenario:
+    """A scenario whose targets are where the effectors are at given angles.
+
+    Args:
+        skeleton: The skeleton.
+        name, description: As in :class:`Scenario`.
+        q_frames: Angles (n_dofs,) for a held pose or (n_frames, n_dofs) for
+            an animation [rad].
+        root: The IK root (default the skeleton's); it is pinned where the
+            rest pose puts it, and every other effector gets a target.
+        frame_time: Seconds per animated frame [s].
+    """
+    sk = skeleton if root is None else skeleton.with_root(root)
+    Q = np.atleast_2d(np.asarray(q_frames, dtype=float))
+    W = _rest_root(sk)
+    effectors = sk.effector_names
+    frames = [sk.frame_of(e) for e in effectors]
+    P = np.empty((Q.shape[0], len(effectors), 3))
+    R = np.empty((Q.shape[0], len(effectors), 3, 3))
+    for i, q in enumerate(Q):
+        Rw, pw = world_frames(sk, q, W, sk.root)
+        P[i], R[i] = pw[frames], Rw[frames]
+    return Scenario(name, description, sk, effectors, P, R, W, True, frame_time)
+
+
+def random_scenario(skeleton: Skeleton, seed: int, spread: float = 0.5, root: str | None = None) -> Scenario:
+    """A seeded random pose: angles drawn between the rest pose and a uniform draw within the limits.
+
+    ``q = rest + spread * (uniform(lower, upper) - rest)``, so ``spread`` 0 is
+    the rest pose and 1 a uniform pose within the limits. The targets (every
+    effector, position and orientation) are where that pose puts the
+    effectors, so an exact solution exists. Named ``random-<seed>``.
+    """
+    if not (isinstance(spread, (int, float)) and 0.0 <= spread <= 1.0):
+        raise ScenarioError(f"random pose spread must be between 0 and 1, got {spread!r}")
+    rng = np.random.default_rng(seed)
+    q = skeleton.rest + spread * (rng.uniform(skeleton.lower, skeleton.upper) - skeleton.rest)
+    return scenario_from_angles(skeleton, f"random-{seed}", f"random pose, seed {seed}, spread {spread:g}",
+                                q, root)
+
+
+def random_scenarios(skeleton: Skeleton, n: int, seed: int = 0, spread: float = 0.5) -> tuple[Scenario, ...]:
+    """``n`` random poses with seeds ``seed, seed + 1, ...`` (see :func:`random_scenario`)."""
+    return tuple(random_scenario(skeleton, seed + k, spread) for k in range(n))
+
+
+#: The biped's scenario poses as joint angles [rad] (the rest pose elsewhere). Root: the right foot.
+#: Signs (skeletons/biped.yaml): hip x > 0 and shoulder x > 0 swing forward, knee x < 0 bends,
+#: ankle x > 0 lifts the toes, waist x < 0 bends forward, right shoulder y < 0 lifts the arm sideways.
+_BIPED_POSES: dict[str, tuple[str, dict[str, float]]] = {
+    "kneel": ("kneel on the left knee, right foot planted, hands forward", {
+        "right_hip.x": 1.5, "right_knee.x": -1.95, "right_ankle.x": 0.45,
+        "left_hip.x": -0.05, "left_knee.x": -1.82, "left_ankle.x": 0.5,
+        "left_shoulder.x": 0.3, "right_shoulder.x": 0.3, "left_elbow.x": 0.6, "right_elbow.x": 0.6,
+    }),
+    "one_leg": ("stand on the right leg, left knee raised, arms out sideways", {
+        "left_hip.x": 1.2, "left_knee.x": -1.6, "left_ankle.x": -0.3,
+        "right_hip.y": 0.08, "right_ankle.y": -0.08,
+        "left_shoulder.y": 1.4, "right_shoulder.y": -1.4,
+    }),
+    "reach_up": ("both arms straight up, looking up", {
+        "left_shoulder.x": 2.9, "right_shoulder.x": 2.9, "left_elbow.x": 0.05, "right_elbow.x": 0.05,
+        "waist.x": 0.25, "neck.x": 0.3, "atlas.x": 0.2,
+    }),
+    "crouch": ("deep crouch, heels down, leaning forward, arms forward", {
+        "left_hip.x": 1.7, "right_hip.x": 1.7, "left_knee.x": -2.2, "right_knee.x": -2.2,
+        "left_ankle.x": 0.5, "right_ankle.x": 0.5, "waist.x": -0.5, "neck.x": 0.3,
+        "left_shoulder.x": 1.3, "right_shoulder.x": 1.3, "left_elbow.x": 0.3, "right_elbow.x": 0.3,
+    }),
+    "twist": ("upper body twisted to the left, one arm forward, one back", {
+        "waist.z": 0.7, "neck.z": 0.9, "left_shoulder.x": -0.6, "right_shoulder.x": 1.2,
+        "left_elbow.x": 0.4, "right_elbow.x": 1.0,
+    }),
+}
+
+#: The wave: the right arm rises sideways, the forearm waves twice, then holds.
+_WAVE_ARM = {"right_shoulder.y": -2.4, "right_elbow.x": 1.2, "neck.z": -0.3}
+_WAVE_SWING = ("right_shoulder.z", 0.5)  # the DOF that waves and its amplitude [rad]
+
+#: Names of the built-in scenarios, in table order.
+SCENARIO_NAMES = ("kneel", "one_leg", "reach_up", "wave", "crouch", "twist", "impossible")
+
+
+def _wave(skeleton: Skeleton, fps: float = 60.0, raise_time: float = 0.5, cycles: int = 2,
+          period: float = 1.0) -> Scenario:
+    up = angles(skeleton, _WAVE_ARM)
+    rest = skeleton.rest
+    n_raise = int(round(raise_time * fps))
+    n_wave = int(round(cycles * period * fps))
+    s = np.linspace(0.0, 1.0, n_raise + 1)[1:]
+    ease = s * s * (3.0 - 2.0 * s)
+    Q = [rest + e * (up - rest) for e in ease]
+    dof, amplitude = _WAVE_SWING
+    d = skeleton.dof_names.index(dof)
+    for k in range(1, n_wave + 1):
+        q = up.copy()
+        q[d] += amplitude * math.sin(2.0 * math.pi * k / (period * fps))
+        Q.append(q)
+    return scenario_from_angles(skeleton, "wave", f"raise the right arm and wave {cycles} times",
+                                np.array(Q), "right_foot", 1.0 / fps)
+
+
+def _impossible(skeleton: Skeleton) -> Scenario:
+    """Every target far out of reach: above, beside and ahead of the character, turned."""
+    sk = skeleton.with_root("right_foot")
+    W = _rest_root(sk)
+    goals = {
+        "head": ((0.0, 0.3, 3.2), ((0, 0, 1), 0.8)),
+        "pelvis": ((0.5, 0.6, 1.8), ((1, 0, 0), -0.6)),
+        "left_hand": ((-2.5, 0.5, 2.5), ((0, 1, 0), 1.5)),
+        "right_hand": ((2.5, -0.5, 0.3), ((0, 1, 0), -1.5)),
+        "left_foot": ((-1.5, 2.0, 1.2), ((1, 0, 0), 1.0)),
+    }
+    effectors = tuple(e for e in sk.effector_names if e in goals)
+    P = np.array([[goals[e][0] for e in effectors]])
+    R = np.array([[matrix_from_axis_angle(np.array(goals[e][1][0], float), goals[e][1][1]) for e in effectors]])
+    return Scenario("impossible", "every target metres out of reach: the best reach must hold still",
+                    sk, effectors, P, R, W, reachable=False)
+
+
+def builtin_scenario(skeleton: Skeleton, name: str) -> Scenario:
+    """One of :data:`SCENARIO_NAMES` for the biped.
+
+    Raises:
+        ScenarioError: an unknown name (listing the valid ones), or a skeleton
+            without the biped's joints and effectors.
+    """
+    if name not in SCENARIO_NAMES:
+        raise ScenarioError(f"no scenario {name!r}; scenarios: {choices(SCENARIO_NAMES)}")
+    needed = {d for _, pose in _BIPED_POSES.values() for d in pose} | set(_WAVE_ARM) | {_WAVE_SWING[0]}
+    missing = sorted(needed - set(skeleton.dof_names))
+    sites = ("head", "pelvis", "left_hand", "right_hand", "left_foot", "right_foot")
+    missing_sites = [s for s in sites if s not in skeleton.effector_sites]
+    if missing or missing_sites:
+        raise ScenarioError(f"the built-in scenarios are written for the biped; skeleton {skeleton.name!r} lacks "
+                            f"{choices(missing + missing_sites)} (use random scenarios instead)")
+    if name == "wave":
+        return _wave(skeleton)
+    if name == "impossible":
+        return _impossible(skeleton)
+    description, pose = _BIPED_POSES[name]
+    return scenario_from_angles(skeleton, name, description, angles(skeleton, pose), "right_foot")
+
+
+def builtin_scenarios(skeleton: Skeleton) -> tuple[Scenario, ...]:
+    """Every built-in scenario, in :data:`SCENARIO_NAMES` order."""
+    return tuple(builtin_scenario(skeleton, n) for n in SCENARIO_NAMES)
+
+
+# -- running them -----------------------------------------------------------------------------
+
+
+class ScenarioReport(NamedTuple):
+    """How the solver did on one scenario (:func:`run_scenario`). Lengths [m], angles [rad].
+
+    Attributes:
+        name: The scenario.
+        root: Its IK root.
+        reachable: Whether its targets can be met.
+        settled: The solver settled within the frame budget.
+        settle_frames: Frames from the last target change to settling (``None`` if it did not).
+        settle_sweeps: Gauss-Seidel sweeps spent until then (all frames, from the rest pose).
+        reach_frames: Frames from the last target change until every effector is within
+            :data:`REACH_TOLERANCE` (``None`` if never: always for an impossible scenario).
+        status: :class:`Status` of the last frame.
+        effector_names: (m,) the effectors, in the order of the error arrays.
+        position_errors: (m,) final distance to each target.
+        orientation_errors: (m,) final angle to each target orientation.
+        tracking_error: Largest position error while the targets moved (0 for a held pose).
+        hold_frames: Frames stepped from settling on (the quiet run and the hold).
+        hold_max_dq: Largest change of any joint angle from one frame to the next after settling.
+        hold_max_move: Largest world displacement of any joint from one frame to the next after settling.
+        finite: No NaN or infinity in any frame.
+        ms_per_frame: Mean wall time per frame [ms] (informative; machines differ).
+        motion: Every frame of the run as a :class:`Motion`.
+    """
+
+    name: str
+    root: str
+    reachable: bool
+    settled: bool
+    settle_frames: int | None
+    settle_sweeps: int
+    reach_frames: int | None
+    status: Status
+    effector_names: tuple[str, ...]
+    position_errors: np.ndarray
+    orientation_errors: np.ndarray
+    tracking_error: float
+    hold_frames: int
+    hold_max_dq: float
+    hold_max_move: float
+    finite: bool
+    ms_per_frame: float
+    motion: Motion
+
+    @property
+    def max_position_error(self) -> float:
+        return float(self.position_errors.max(initial=0.0))
+
+    @property
+    def max_orientation_error(self) -> float:
+        return float(self.orientation_errors.max(initial=0.0))
+
+    def errors(self) -> dict[str, tuple[float, float]]:
+        """``{effector: (position error [m], orientation error [rad])}``."""
+        return {n: (float(p), float(o)) for n, p, o in zip(self.effector_names, self.position_errors,
+                                                           self.orientation_errors)}
+
+
+_SETTLED = (Status.CONVERGED, Status.STALLED)
+#: "Visually there": every effector within 1 mm and 1 degree of its target.
+REACH_TOLERANCE = (1e-3, math.radians(1.0))
+
+
+def run_scenario(
+    scenario: Scenario,
+    settings: SolverSettings | None = None,
+    *,
+    max_frames: int = 600,
+    hold_frames: int = 60,
+    quiet_frames: int = 10,
+    progress: Callable[[int, int], None] | None = None,
+    **overrides,
+) -> ScenarioReport:
+    """Run a scenario like the interactive app: one warm-started step per frame from the rest pose.
+
+    The targets are set at frame 0 (a jump from the rest pose, the hardest
+    case) and follow the scenario's animation, if any. The solver has
+    settled at the first frame that starts ``quiet_frames`` frames in a row
+    whose step reports converged or stalled (best reach), counted from the
+    last target change. It then keeps stepping ``hold_frames`` more frames,
+    and the largest change of the pose from frame to frame over the quiet and
+    hold frames is recorded: a stable solver keeps it at zero. A run that
+    does not settle within ``max_frames`` is watched the same way over the
+    frames that follow.
+
+    Args:
+        scenario: The scenario.
+        settings: Solver settings (default :class:`SolverSettings()`);
+            keyword ``overrides`` change fields of it.
+        max_frames: Frame budget after the targets stop moving.
+        hold_frames: Frames stepped after settling.
+        quiet_frames: Consecutive settled frames that count as settled.
+        progress: Called as ``progress(frames_done, frames_at_most)`` after each frame.
+
+    Raises:
+        ScenarioError: a frame count below 1.
+        SolverError: bad solver settings.
+    """
+    for what, v in (("max_frames", max_frames), ("hold_frames", hold_frames), ("quiet_frames", quiet_frames)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+            raise ScenarioError(f"{what} must be a whole number >= 1, got {v!r}")
+    sk = scenario.skeleton
+    solver = Solver(sk, world_from_root=scenario.world_from_root, settings=settings, **overrides)
+    last_change = scenario.n_frames - 1
+    limit = last_change + max_frames + quiet_frames + hold_frames  # frames to run at most
+    qs = [solver.q]  # qs[k + 1] is the pose after frame k
+    sweeps = [0]
+    tracking = 0.0
+    reached_at = None  # first frame within REACH_TOLERANCE, after the last target change
+    settled_at = None  # first frame of the quiet run
+    hold_from = None  # the frame from which the pose is watched for changes
+    quiet = 0
+    start = time.perf_counter()
+    i = 0
+    while i < limit:
+        if i < scenario.n_frames:
+            solver.set_targets(scenario.targets_at(i))
+        result = solver.step()
+        qs.append(result.q)
+        sweeps.append(result.sweeps)
+        if i < last_change:
+            tracking = max(tracking, result.max_position_error)
+        elif hold_from is None:
+            if reached_at is None and result.max_position_error <= REACH_TOLERANCE[0] \
+                    and result.max_orientation_error <= REACH_TOLERANCE[1]:
+                reached_at = i
+            quiet = quiet + 1 if result.status in _SETTLED else 0
+            if quiet == quiet_frames:
+                settled_at = hold_from = i - quiet_frames + 1
+            elif i - last_change + 1 >= max_frames:
+                hold_from = i + 1 - quiet_frames  # never settled: watch the frames that follow all the same
+            if hold_from is not None:
+                limit = hold_from + quiet_frames + hold_frames
+        i += 1
+        if progress is not None:
+            progress(i, limit)
+    elapsed = time.perf_counter() - start
+    n_run = i
+    Q = np.array(qs)
+    settled = settled_at is not None
+    hold = Q[hold_from + 1:]
+    dq = np.abs(np.diff(hold, axis=0))
+    W = np.tile(scenario.world_from_root, (Q.shape[0], 1, 1))
+    finite = bool(np.all(np.isfinite(Q)))
+    motion = Motion(sk, Q, (sk.root,) * Q.shape[0], W, scenario.frame_time)
+    if finite and hold.shape[0] > 1:
+        points = np.concatenate([sk.joint_frame, sk.site_frame])
+        P = np.stack([world_frames(sk, q, scenario.world_from_root, sk.root)[1][points] for q in hold])
+        move = float(np.linalg.norm(np.diff(P, axis=0), axis=2).max())
+    else:
+        move = 0.0 if finite else math.inf
+    return ScenarioReport(
+        name=scenario.name,
+        root=sk.root,
+        reachable=scenario.reachable,
+        settled=settled,
+        settle_frames=(settled_at - last_change) if settled else None,
+        settle_sweeps=int(sum(sweeps[: settled_at + 2])) if settled else int(sum(sweeps)),
+        reach_frames=None if reached_at is None else reached_at - last_change,
+        status=result.status,
+        effector_names=result.effector_names,
+        position_errors=result.position_errors,
+        orientation_errors=result.orientation_errors,
+        tracking_error=float(tracking),
+        hold_frames=hold.shape[0],
+        hold_max_dq=float(dq.max(initial=0.0)) if finite else math.inf,
+        hold_max_move=move,
+        finite=finite,
+        ms_per_frame=1e3 * elapsed / n_run,
+        motion=motion,
+    )
+
+
+def run_scenarios(scenarios: Sequence[Scenario], settings: SolverSettings | None = None,
+                  progress: Callable[[int, int], None] | None = None, **kwargs) -> list[ScenarioReport]:
+    """:func:`run_scenario` on each; ``progress(scenarios_done, n_scenarios)`` after each."""
+    reports = []
+    for k, s in enumerate(scenarios):
+        reports.append(run_scenario(s, settings, **kwargs))
+        if progress is not None:
+            progress(k + 1, len(scenarios))
+    return reports
+
+
+def format_table(reports: Sequence[ScenarioReport]) -> str:
+    """The reports as a plain-text table, one row per scenario."""
+    header = ("scenario", "root", "status", "settled", "frames", "sweeps", "to 1 mm", "track mm", "pos err mm",
+              "ori err deg", "max dq after rad", "max move after m", "NaN")
+    rows = [header]
+    for r in reports:
+        rows.append((
+            r.name,
+            r.root,
+            r.status.value,
+            "yes" if r.settled else "NO",
+            "-" if r.settle_frames is None else str(r.settle_frames),
+            str(r.settle_sweeps),
+            "-" if r.reach_frames is None else str(r.reach_frames),
+            f"{r.tracking_error * 1e3:.2f}" if r.tracking_error else "-",
+            f"{r.max_position_error * 1e3:.3f}",
+            f"{math.degrees(r.max_orientation_error):.3f}",
+            f"{r.hold_max_dq:.1e}",
+            f"{r.hold_max_move:.1e}",
+            "none" if r.finite else "YES",
+        ))
+    widths = [max(len(row[c]) for row in rows) for c in range(len(header))]
+    lines = []
+    for k, row in enumerate(rows):
+        cells = [cell.ljust(w) if c < 4 else cell.rjust(w) for c, (cell, w) in enumerate(zip(row, widths))]
+        lines.append("  ".join(cells).rstrip())
+        if k == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def scenario_pose(scenario: Scenario, q: np.ndarray | None = None) -> Pose:
+    """A :class:`gsik.pose.Pose` of a scenario: its last targets, with the angles ``q`` (default the rest pose).
+
+    Every effector of the scenario's root is in the pose; one the scenario
+    does not drive is written disabled, at where ``q`` puts it.
+    """
+    sk = scenario.skeleton
+    q = sk.rest if q is None else sk.validate_q(q)
+    W = scenario.world_from_root
+    achieved = sk.effector_poses(q, W)
+    k = scenario.n_frames - 1
+    targets = {}
+    for e in sk.effector_names:
+        if e in scenario.effectors:
+            j = scenario.effectors.index(e)
+            quaternion = quaternion_from_matrix(scenario.rotations[k, j])
+            targets[e] = TargetPose(tuple(scenario.positions[k, j]), tuple(quaternion))
+        else:
+            targets[e] = TargetPose.from_transform(achieved[e], enabled=False)
+    return Pose(sk.name, sk.root, tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])),
+                dict(zip(sk.dof_names, (float(v) for v in q))), targets)
