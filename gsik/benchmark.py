@@ -172,6 +172,35 @@ def reach(skeleton: Skeleton | None = None, problems: int = 1000, seed: int = 1,
                        float(np.percentile(t_ms, 90)), float(np.mean(attempts)))
 
 
+@dataclass(frozen=True)
+class StabilityResult:
+    method: str
+    last_change: float  # largest frame-to-frame joint change over the last 100 frames [rad]
+    final_status: str
+    nan: bool
+
+
+def stability(skeleton: Skeleton | None = None, frames: int = 400) -> list[StabilityResult]:
+    """Hold unreachable targets (a hand 3 m away, the head 1.3 m above itself) for ``frames`` frames."""
+    sk = skeleton or load_skeleton("biped")
+    out = []
+    for method, settings in (("paper's plain method, k=5", dict(PAPER_SETTINGS, sweeps=5)),
+                             ("defaults, k=5", dict(sweeps=5))):
+        solver = Solver(sk, **settings)
+        targets = {n: Target.from_transform(T) for n, T in solver.effector_poses().items()}
+        targets["left_hand"] = Target([-3.0, 2.0, 2.5])
+        targets["head"] = Target([0.0, 0.0, 3.0], np.eye(3))
+        changes = []
+        nan = False
+        for _ in range(frames):
+            q0 = solver.q
+            r = solver.step(targets)
+            nan |= not np.all(np.isfinite(r.q))
+            changes.append(float(np.abs(r.q - q0).max()))
+        out.append(StabilityResult(method, max(changes[-100:]), r.status.value, nan))
+    return out
+
+
 def report(repeats: int = 3000, frames: int = 600, problems: int = 1000,
            progress: Callable[[int, int], None] | None = None) -> str:
     """Run all three benchmarks and format them as Markdown for the README."""
@@ -190,6 +219,10 @@ def report(repeats: int = 3000, frames: int = 600, problems: int = 1000,
     for t in tracking(frames=frames):
         lines.append(f"| {t.method} | {100 * t.within:.1f}% | {t.median_position_error * 1e3:.3f} / "
                      f"{t.max_position_error * 1e3:.2f} mm | {t.median_us:.0f} µs |")
+    lines += ["", "### Unreachable targets held for 400 frames (a hand 3 m away, the head 1.3 m too high)", "",
+              "| method | largest joint change per frame, last 100 frames | status | NaN |", "|---|---|---|---|"]
+    for st in stability():
+        lines.append(f"| {st.method} | {st.last_change:.2g} rad | {st.final_status} | {'yes' if st.nan else 'no'} |")
     r = reach(problems=problems, progress=progress)
     lines += ["", f"### Reach: {r.problems} random poses within the limits, all 5 effectors 6-DOF, from the rest pose",
               "", "| success (1 mm, 1°) | first attempt alone | median time | 90th percentile | mean attempts |",
