@@ -218,7 +218,7 @@ def jacobian(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, J):
 def linear_system(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, e, row_w, A, b, v):
     """``A = J^T W J`` and ``b = J^T W e`` straight from the frames, never forming J.
 
-    Same numbers as :func:`jacobian` then :func:`normal_equations`; each
+    Same numbers as ``J^T W J`` from :func:`jacobian`; each
     effector's Jacobian block is built compactly, (dofs on its path, 6),
     so the products run over contiguous memory. ``v`` (2, n_dofs, 6) is scratch.
     """
@@ -259,57 +259,6 @@ def linear_system(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, e, ro
                 A[d1, d2] += acc
                 if d1 != d2:
                     A[d2, d1] += acc
-
-
-@njit(cache=True)
-def normal_equations(J, e, row_w, eff_dofs, eff_n, A, b, wj):
-    """``A = J^T W J`` and ``b = J^T W e``, touching only the DOFs each effector depends on.
-
-    ``wj`` (6, n_dofs) is scratch.
-    """
-    A[:, :] = 0.0
-    b[:] = 0.0
-    m = eff_dofs.shape[0]
-    for k in range(m):
-        n_k = eff_n[k]
-        for t in range(n_k):
-            d = eff_dofs[k, t]
-            acc = 0.0
-            for r in range(6):
-                v = row_w[k, r] * J[6 * k + r, d]
-                wj[r, d] = v
-                acc += v * e[6 * k + r]
-            b[d] += acc
-        for t in range(n_k):
-            d1 = eff_dofs[k, t]
-            for u in range(t, n_k):
-                d2 = eff_dofs[k, u]
-                acc = 0.0
-                for r in range(6):
-                    acc += wj[r, d1] * J[6 * k + r, d2]
-                A[d1, d2] += acc
-                if d1 != d2:
-                    A[d2, d1] += acc
-
-
-@njit(cache=True, inline="always")
-def _row_residual(A, b, x, i, n):
-    """``b[i] - A[i] @ x`` with four accumulators: the add chain, not the multiplies, bounds a sweep."""
-    r0 = b[i]
-    r1 = 0.0
-    r2 = 0.0
-    r3 = 0.0
-    j = 0
-    while j + 4 <= n:
-        r0 -= A[i, j] * x[j]
-        r1 -= A[i, j + 1] * x[j + 1]
-        r2 -= A[i, j + 2] * x[j + 2]
-        r3 -= A[i, j + 3] * x[j + 3]
-        j += 4
-    while j < n:
-        r0 -= A[i, j] * x[j]
-        j += 1
-    return (r0 + r1) + (r2 + r3)
 
 
 @njit(cache=True)

@@ -59,3 +59,25 @@ def test_effector_topology_lists_exactly_the_dofs_on_the_path(biped):
         assert listed == set(np.flatnonzero(topo.sign[k])), name
     # Right foot to left foot: right ankle (3), knee (1), hip (3), left hip (3), knee (1), ankle (3).
     assert topo.effector_dof_count[topo.effector_names.index("left_foot")] == 14
+
+
+def test_fused_linear_system_equals_the_normal_equations_of_the_jacobian(biped):
+    """The kernels build J^T W J and J^T W e without forming J; check them against NumPy on J."""
+    from gsik import _kernels
+
+    rng = np.random.default_rng(7)
+    q = random_q(biped, rng)
+    W = biped.frame_transforms(q)[biped.frame_of("right_foot")]
+    topo = topology(biped, "right_foot")
+    R, p = world_frames(biped, q, W, "right_foot")
+    J = jacobian(biped, q, topo.effector_names, "right_foot", W)
+    e = rng.normal(size=J.shape[0])
+    row_w = rng.uniform(0.1, 2.0, (len(topo.effector_names), 6))
+    A = np.empty((biped.n_dofs, biped.n_dofs))
+    b = np.empty(biped.n_dofs)
+    _kernels.linear_system(R, p, biped.frame_axis, biped.dof_frame, topo.effector_frame, topo.sign,
+                           topo.effector_dofs, topo.effector_dof_count, e, row_w, A, b,
+                           np.empty((2, biped.n_dofs, 6)))
+    w = row_w.ravel()
+    np.testing.assert_allclose(A, J.T @ (w[:, None] * J), atol=1e-12)
+    np.testing.assert_allclose(b, J.T @ (w * e), atol=1e-12)
