@@ -261,6 +261,26 @@ def linear_system(R, p, axis, dof_frame, eff_frame, sign, eff_dofs, eff_n, e, ro
                     A[d2, d1] += acc
 
 
+@njit(cache=True, inline="always")
+def _row_residual(A, b, x, i, n):
+    """``b[i] - A[i] @ x`` with four accumulators: the add chain, not the multiplies, bounds a sweep."""
+    r0 = b[i]
+    r1 = 0.0
+    r2 = 0.0
+    r3 = 0.0
+    j = 0
+    while j + 4 <= n:
+        r0 -= A[i, j] * x[j]
+        r1 -= A[i, j + 1] * x[j + 1]
+        r2 -= A[i, j + 2] * x[j + 2]
+        r3 -= A[i, j + 3] * x[j + 3]
+        j += 4
+    while j < n:
+        r0 -= A[i, j] * x[j]
+        j += 1
+    return (r0 + r1) + (r2 + r3)
+
+
 @njit(cache=True)
 def _projected_residual(A, b, x, lo, hi):
     """``|b - A x|`` over the unknowns not held at a bound by an outward-pointing residual."""
