@@ -30,6 +30,9 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("QT_QPA_PLATFORM", "xcb" if sys.platform.startswith("linux") else "")
     if not os.environ["QT_QPA_PLATFORM"]:
         del os.environ["QT_QPA_PLATFORM"]
+    from app.qt_compat import protect_none
+
+    protect_none()  # PySide6 6.12 on Python 3.11 drops references to None (see app.qt_compat)
     import pyvista as pv
     from PySide6 import QtCore, QtWidgets
 

@@ -21,9 +21,10 @@ from PySide6.QtCore import Qt
 
 import gsik
 from app.model import Document, Playback
+from app.qt_compat import protect_none
 
 FRAME_INTERVAL_MS = 16  # ~60 Hz
-READOUT_INTERVAL_S = 0.1  # panel and status texts refresh at most this often
+READOUT_INTERVAL_S = 0.25  # panel and status texts refresh at most this often
 MAX_RECENT = 8
 ROTATE_STEP_DEG = 15.0
 
@@ -83,6 +84,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def __init__(self, doc: Document | None = None, settings: QtCore.QSettings | None = None,
                  parent: QtWidgets.QWidget | None = None):
+        protect_none()  # PySide6 6.12 on Python 3.11 (see app.qt_compat)
         super().__init__(parent)
         import pyvista as pv
         from pyvistaqt import QtInteractor
@@ -192,8 +194,17 @@ class MainWindow(QtWidgets.QMainWindow):
         for name, key in (("front", "1"), ("side", "3"), ("top", "7"), ("perspective", "5")):
             self.act_views[name] = self._action(name.capitalize(), lambda n=name: self.set_view(n), key,
                                                 f"{name.capitalize()} view")
+        # Animations (issue 4): offered when gsik has them.
         self.act_walk = None
         self.act_scenarios = None
+        try:
+            from gsik import gait
+        except ImportError:
+            gait = None
+        if gait is not None and hasattr(gait, "walk") and hasattr(gait, "WalkParameters"):
+            self.act_walk = self._action("Walk", self.play_walk, None,
+                                         "Play a walk: the IK root swaps between the feet at every step",
+                                         S.SP_MediaSeekForward)
 
     def _make_menus(self) -> None:
         mb = self.menuBar()
@@ -217,6 +228,9 @@ class MainWindow(QtWidgets.QMainWindow):
         m.addSeparator()
         for a in (self.act_reset, self.act_random, self.act_mirror_lr, self.act_mirror_rl):
             m.addAction(a)
+        for a in (self.act_walk, self.act_scenarios):
+            if a is not None:
+                m.addAction(a)
         self.pose_menu = m
         m = mb.addMenu("&View")
         m.addAction(self.act_frame)
@@ -234,10 +248,12 @@ class MainWindow(QtWidgets.QMainWindow):
         tb.setIconSize(QtCore.QSize(18, 18))
         for a in (self.act_open, self.act_save, None, self.act_undo, self.act_redo, None, self.act_root_left,
                   self.act_root_right, None, self.act_reset, self.act_random, self.act_mirror_lr, self.act_mirror_rl,
-                  None, self.act_pause, self.act_screenshot, None, self.act_frame):
+                  None, self.act_walk or False, self.act_scenarios or False, None, self.act_pause,
+                  self.act_screenshot, None,
+                  self.act_frame):
             if a is None:
                 tb.addSeparator()
-            else:
+            elif a is not False:
                 tb.addAction(a)
         self.toolbar = tb
 
@@ -447,13 +463,15 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -- document -> widgets ----------------------------------------------------------------
     def _on_doc_changed(self, kind: str) -> None:
-        if kind in ("pose", "targets"):
+        if kind in ("pose", "targets", "options"):
             self.viewport.sync_targets()
-            self.viewport.refresh()
-            self._sync_rows()
-            self._sync_root()
-            self.viewport.render()
+            if kind != "targets":
+                self._sync_rows()
+                self._sync_root()
             self._ensure_running()
+            if not self.timer.isActive():  # otherwise the next tick redraws
+                self.viewport.refresh()
+                self.viewport.render()
         elif kind == "settings":
             self._sync_settings()
             self._ensure_running()
@@ -504,6 +522,10 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _update_history_actions(self) -> None:
         h = self.doc.history
+        state = (h.can_undo, h.can_redo, h.undo_text, h.redo_text)
+        if state == getattr(self, "_history_state", None):
+            return
+        self._history_state = state
         self.act_undo.setEnabled(h.can_undo)
         self.act_redo.setEnabled(h.can_redo)
         self.act_undo.setText(f"&Undo {h.undo_text}" if h.can_undo else "&Undo")
@@ -512,6 +534,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.act_redo.setIconText("Redo")
 
     def _update_title(self) -> None:
+        state = (self.doc.title, self.doc.dirty)
+        if state == getattr(self, "_title_state", None):
+            return
+        self._title_state = state
         self.setWindowTitle(f"{self.doc.title}[*] — gsik studio")
         self.setWindowModified(self.doc.dirty)
 
@@ -608,6 +634,21 @@ class MainWindow(QtWidgets.QMainWindow):
         self.play_timer.start()
         self._update_readouts(force=True)
         return self.playback
+
+    def play_walk(self, n_steps: int = 4) -> Playback | None:
+        """Solve a walk with :func:`gsik.gait.walk` from the standing pose and play it."""
+        from gsik import gait
+
+        QtWidgets.QApplication.setOverrideCursor(Qt.WaitCursor)
+        try:
+            result = gait.walk(self.doc.skeleton, gait.WalkParameters(n_steps=n_steps))
+        except gsik.GsikError as exc:
+            self.statusBar().showMessage(f"Could not make a walk: {exc}", 8000)
+            return None
+        finally:
+            QtWidgets.QApplication.restoreOverrideCursor()
+        self.statusBar().showMessage(f"Walking: {result.motion.n_frames} frames, root swapping at every step", 5000)
+        return self.play(result.motion, "Walk")
 
     def _play_tick(self) -> None:
         pb = self.playback

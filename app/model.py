@@ -112,6 +112,11 @@ class History:
         self.index = len(self.commands)
         return True
 
+    def would_merge(self, merge_key: object | None) -> bool:
+        """True if a command with ``merge_key`` would merge into the current top."""
+        return (merge_key is not None and self.index == len(self.commands) and bool(self.commands)
+                and self.commands[-1].merge_key == merge_key)
+
     def end_merge(self) -> None:
         """The next command does not merge into the current top (a drag ended)."""
         if self.commands:
@@ -164,7 +169,8 @@ class Document:
 
     Signals (plain callbacks, see :class:`Signal`):
         changed(kind): ``"pose"`` (angles, root or targets replaced),
-            ``"targets"`` (a target edited), ``"settings"``, ``"file"``
+            ``"targets"`` (a target moved or turned), ``"options"`` (a target's
+            enabled / weight / position-only changed), ``"settings"``, ``"file"``
             (path or dirty flag), ``"history"``.
     """
 
@@ -182,6 +188,7 @@ class Document:
         self.last_solve_time = 0.0  # [s]
         self.needs_solving = True
         self._targets: dict[str, TargetPose] = {}
+        self._solver_targets: dict[str, tuple[TargetPose, gsik.Target]] = {}
         self._root_position = (0.0, 0.0, 0.0)
         self._root_orientation = (1.0, 0.0, 0.0, 0.0)
         self._initial = self._standing_pose({})
@@ -277,10 +284,18 @@ class Document:
         self.last_result = None
 
     def _push_targets(self) -> None:
-        self.solver.set_targets({
-            n: gsik.Target(t.position, t.rotation, weight=t.weight, position_only=t.position_only)
-            for n, t in self._targets.items() if t.enabled
-        })
+        """Hand the enabled targets to the solver (a gsik.Target is made once per TargetPose)."""
+        cache = self._solver_targets
+        out = {}
+        for n, t in self._targets.items():
+            if not t.enabled:
+                continue
+            hit = cache.get(n)
+            if hit is None or hit[0] is not t:
+                hit = (t, gsik.Target(t.position, t.orientation, weight=t.weight, position_only=t.position_only))
+                cache[n] = hit
+            out[n] = hit[1]
+        self.solver.set_targets(out)
         self.needs_solving = True
 
     def _snapped_targets(self) -> dict[str, TargetPose]:
@@ -295,12 +310,17 @@ class Document:
     # -- commands --------------------------------------------------------------
     def _edit(self, text: str, apply: Callable[[], None], merge_key: object | None = None,
               kind: str = "pose") -> None:
-        before = self.pose()
+        merging = self.history.would_merge(merge_key)
+        before = None if merging else self.pose()  # a merged move keeps the drag's first "before"
         apply()
         self.needs_solving = True
-        self.history.push(Command(text, before, merge_key=merge_key))
+        if merging:
+            self.history.push(Command(text, self.history.commands[-1].before, merge_key=merge_key))
+        else:
+            self.history.push(Command(text, before, merge_key=merge_key))
         self.changed.emit(kind)
-        self.changed.emit("history")
+        if not merging:
+            self.changed.emit("history")
         self.changed.emit("file")
 
     def _effector(self, name: str) -> TargetPose:
@@ -312,16 +332,35 @@ class Document:
 
     def set_target(self, name: str, target: TargetPose, text: str | None = None,
                    merge_key: object | None = None) -> None:
-        """Replace one effector's target (the general form of every target edit)."""
+        """Replace one effector's target (the general form of every target edit).
+
+        Emits ``changed("targets")`` when only the position or orientation
+        changed, ``changed("options")`` when enabled, weight or position-only did.
+        """
         self._effector(name)
         if not isinstance(target, TargetPose):
             raise gsik.TargetError(f"target for {name!r} must be a TargetPose, got {type(target).__name__}")
+
+        old = self._targets[name]
+        same_flags = (old.enabled, old.weight, old.position_only) == (target.enabled, target.weight,
+                                                                      target.position_only)
 
         def apply():
             self._targets[name] = target
             self._push_targets()
 
-        self._edit(text or f"Edit {name} target", apply, merge_key, kind="targets")
+        self._edit(text or f"Edit {name} target", apply, merge_key, kind="targets" if same_flags else "options")
+
+    def move_targets(self, positions: Mapping[str, Sequence[float]], drag: object | None = None) -> None:
+        """Move several targets at once (one undo step; merged over one ``drag`` token)."""
+        new = {n: self._effector(n).replace(position=p) for n, p in positions.items()}
+
+        def apply():
+            self._targets.update(new)
+            self._push_targets()
+
+        key = None if drag is None else ("move", tuple(sorted(new)), drag)
+        self._edit(f"Move {', '.join(new)}", apply, key, kind="targets")
 
     def move_target(self, name: str, position, drag: object | None = None) -> None:
         """Move a target to a world position (3,) [m].

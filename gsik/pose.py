@@ -49,6 +49,7 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 from types import MappingProxyType
 from typing import Any, NamedTuple
 
@@ -75,6 +76,9 @@ _TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only")
 
 
 def _floats(value, n: int, what: str) -> tuple[float, ...]:
+    if isinstance(value, (tuple, list)) and len(value) == n and all(type(v) is float for v in value):
+        if all(math.isfinite(v) for v in value):  # the common case, without NumPy
+            return tuple(value)
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError):
@@ -122,11 +126,13 @@ class TargetPose:
         object.__setattr__(self, "enabled", bool(self.enabled))
         object.__setattr__(self, "position_only", bool(self.position_only))
 
-    @property
+    @cached_property
     def rotation(self) -> np.ndarray:
-        """The orientation as a rotation matrix (3, 3)."""
+        """The orientation as a rotation matrix (3, 3) (read-only)."""
         q = np.array(self.orientation)
-        return matrix_from_quaternion(q / np.linalg.norm(q))
+        R = matrix_from_quaternion(q / np.linalg.norm(q))
+        R.flags.writeable = False
+        return R
 
     @classmethod
     def from_transform(cls, world_from_effector: np.ndarray, enabled: bool = True, weight: float = 1.0,
@@ -140,7 +146,10 @@ class TargetPose:
         fields = dict(position=self.position, orientation=self.orientation, enabled=self.enabled,
                       weight=self.weight, position_only=self.position_only)
         fields.update(changes)
-        return TargetPose(**fields)
+        new = TargetPose(**fields)
+        if new.orientation == self.orientation and "rotation" in self.__dict__:
+            new.__dict__["rotation"] = self.__dict__["rotation"]  # same orientation: reuse the matrix
+        return new
 
 
 @dataclass(frozen=True)
@@ -168,7 +177,9 @@ class Pose:
         object.__setattr__(self, "root_orientation", _unit_quaternion(self.root_orientation, "root orientation"))
         joints = {}
         for name, value in dict(self.joints).items():
-            joints[str(name)] = _floats([value], 1, f"joint {name!r}")[0]
+            if type(value) is not float or not math.isfinite(value):
+                value = _floats([value], 1, f"joint {name!r}")[0]
+            joints[str(name)] = value
         targets = {}
         for name, t in dict(self.targets).items():
             if not isinstance(t, TargetPose):
