@@ -37,13 +37,14 @@ def main(argv: list[str] | None = None) -> int:
     from PySide6 import QtCore, QtWidgets
 
     import gsik
-    from app.main_window import MainWindow
+    from app.main_window import MainWindow, apply_dark_theme
     from app.model import Document
 
     pv.global_theme.multi_samples = 0
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([sys.argv[0]])
     app.setApplicationName("gsik-studio")
     app.setOrganizationName("gsik")
+    apply_dark_theme(app)
 
     if args.screenshot:
         # A one-shot picture: no remembered geometry, no dialogs.

@@ -41,7 +41,7 @@ JOINT_COLOR = (0.80, 0.80, 0.84)
 LIMIT_COLOR = (1.00, 0.55, 0.00)
 BONE_COLOR = (0.86, 0.83, 0.76)
 ROOT_COLOR = (1.00, 0.84, 0.15)
-ERROR_LINE_COLOR = (1.00, 0.55, 0.55)
+ERROR_LINE_COLOR = (1.00, 0.82, 0.45)
 GRID_COLOR = (0.42, 0.45, 0.50)
 BACKGROUND_TOP = (0.24, 0.26, 0.31)
 BACKGROUND_BOTTOM = (0.10, 0.11, 0.13)
@@ -54,7 +54,7 @@ TRIAD_TARGET = 0.11  # [m]
 TARGET_RADIUS = 0.034  # [m]
 TARGET_OPACITY = 0.6  # the achieved effector shows through its target
 JOINT_RADIUS = 0.022  # [m]
-EFFECTOR_RADIUS = 0.022  # [m]
+EFFECTOR_RADIUS = 0.026  # [m]
 BOX_SIZE = 0.16  # [m]
 
 VIEWS = {
@@ -224,7 +224,7 @@ class Viewport:
 
         # Thin lines target <-> achieved.
         self._errors = pv.PolyData(np.zeros((m * 2, 3)), lines=_lines(np.arange(m * 2).reshape(-1, 2)))
-        self.actors["errors"] = pl.add_mesh(self._errors, color=ERROR_LINE_COLOR, line_width=1, lighting=False,
+        self.actors["errors"] = pl.add_mesh(self._errors, color=ERROR_LINE_COLOR, line_width=1.5, lighting=False,
                                             pickable=False, reset_camera=False)
 
         # Root marker: a ring on the sole of the root, moved with a user matrix.
@@ -487,7 +487,7 @@ class Viewport:
         cam.up = up
         self.frame_all()
 
-    def frame_all(self, margin: float = 0.08) -> None:
+    def frame_all(self, margin: float = 0.14) -> None:
         """Fit the character and its targets in the view, keeping the viewing direction."""
         cam = self.plotter.camera
         P = self.doc.solver.world_positions()

@@ -261,7 +261,8 @@ def main() -> None:
     solve = 1e3 * statistics.median(app_run.solve_times)
     print(f"gsik-studio benchmark: window {size[0]}x{size[1]} (3D viewport {viewport[0]}x{viewport[1]}), "
           f"{args.frames} frames per scene in turns of {args.block}, 3 targets moving")
-    print(f"  app window:            {fps_app:6.1f} fps  (median frame {1e3 * statistics.median(app_run.frame_times):.1f} ms;"
+    frame_ms = 1e3 * statistics.median(app_run.frame_times)
+    print(f"  app window:            {fps_app:6.1f} fps  (median frame {frame_ms:.1f} ms;"
           f" {info['renders']} paints for {args.frames + 10} frames; {info['commands']} undo step for the whole drag)")
     print(f"  app's own time/frame:  {app_ms:6.3f} ms median, {p95:.3f} ms p95 (target command, solver step, scene "
           f"update, read-outs; no VTK render, no Qt paint)")
