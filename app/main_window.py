@@ -16,12 +16,14 @@ import math
 import os
 import time
 
+import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 from PySide6.QtCore import Qt
 
 import gsik
 from app.model import Document, Playback
 from app.qt_compat import protect_none
+from gsik.pose import TargetPose
 
 FRAME_INTERVAL_MS = 16  # ~60 Hz
 READOUT_INTERVAL_S = 0.25  # panel and status texts refresh at most this often
@@ -227,6 +229,25 @@ class MainWindow(QtWidgets.QMainWindow):
             self.act_walk = self._action("Walk", self.play_walk, None,
                                          "Play a walk: the IK root swaps between the feet at every step",
                                          S.SP_MediaSeekForward)
+        try:
+            from gsik import scenarios
+        except ImportError:
+            scenarios = None
+        if scenarios is not None and all(hasattr(scenarios, n) for n in ("SCENARIO_NAMES", "builtin_scenario",
+                                                                          "scenario_pose")):
+            self.scenario_menu = QtWidgets.QMenu("Scenarios", self)
+            self.scenario_menu.setToolTipsVisible(True)
+            for name in scenarios.SCENARIO_NAMES:
+                a = self.scenario_menu.addAction(_nice(name))
+                try:
+                    a.setToolTip(scenarios.builtin_scenario(self.doc.skeleton, name).description)
+                except gsik.GsikError as exc:  # a skeleton the built-in scenarios do not fit
+                    a.setEnabled(False)
+                    a.setToolTip(str(exc))
+                a.triggered.connect(lambda _c=False, n=name: self.play_scenario(n))
+            self.act_scenarios = self.scenario_menu.menuAction()
+            self.act_scenarios.setIcon(self.style().standardIcon(S.SP_FileDialogDetailedView))
+            self.act_scenarios.setToolTip("Load a test scenario (targets from the paper's poses) and watch it solve")
 
     def _make_menus(self) -> None:
         mb = self.menuBar()
@@ -277,6 +298,10 @@ class MainWindow(QtWidgets.QMainWindow):
                 tb.addSeparator()
             elif a is not False:
                 tb.addAction(a)
+        if self.act_scenarios is not None:
+            button = tb.widgetForAction(self.act_scenarios)
+            if isinstance(button, QtWidgets.QToolButton):
+                button.setPopupMode(QtWidgets.QToolButton.InstantPopup)
         self.toolbar = tb
 
     def _make_panel(self) -> None:
@@ -671,6 +696,34 @@ class MainWindow(QtWidgets.QMainWindow):
             QtWidgets.QApplication.restoreOverrideCursor()
         self.statusBar().showMessage(f"Walking: {result.motion.n_frames} frames, root swapping at every step", 5000)
         return self.play(result.motion, "Walk")
+
+    def play_scenario(self, name: str) -> Playback | None:
+        """Load a built-in scenario of :mod:`gsik.scenarios`: the rest pose with the scenario's targets.
+
+        The solver then settles it live, as it does after a drag; an animated
+        scenario (the wave) plays its target frames first.
+        """
+        from gsik import scenarios
+
+        try:
+            sc = scenarios.builtin_scenario(self.doc.skeleton, name)
+            first = scenarios.scenario_pose(sc)
+        except gsik.GsikError as exc:
+            self.statusBar().showMessage(f"Could not load scenario {name}: {exc}", 8000)
+            return None
+        self.stop_playback()
+        if sc.n_frames > 1:  # start at the first frame's targets, then play the rest
+            t0 = sc.targets_at(0)
+            first = first.replace(targets={n: (TargetPose.from_transform(
+                np.vstack([np.column_stack([t0[n].orientation, t0[n].position]), [0, 0, 0, 1]]))
+                if n in t0 else t) for n, t in first.targets.items()})
+        self.doc.set_pose(first, f"Scenario {_nice(name)}")
+        self.viewport.frame_all()
+        self.statusBar().showMessage(f"Scenario {_nice(name)}: {sc.description}", 8000)
+        if sc.n_frames > 1:
+            return self.play([sc.targets_at(i) for i in range(1, sc.n_frames)], f"Scenario {_nice(name)} (animated)",
+                             sc.frame_time)
+        return None
 
     def _play_tick(self) -> None:
         pb = self.playback
