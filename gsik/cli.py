@@ -291,7 +291,7 @@ def cmd_solve(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def cmd_walk(args: argparse.Namespace, out: TextIO) -> int:
-    from gsik.gait import WALK_STEPS_PER_FRAME, WalkParameters, format_measures, measure_walk, walk
+    from gsik.gait import REACH_WARNING, WALK_STEPS_PER_FRAME, WalkParameters, format_measures, measure_walk, walk
 
     if args.out:
         _check_out(args.out, (".bvh",), "BVH")
@@ -314,6 +314,9 @@ def cmd_walk(args: argparse.Namespace, out: TextIO) -> int:
     out.write(f"walk: {p.n_steps} steps of {p.step_length:g} m, {p.cadence:g} steps/min "
               f"({p.step_duration:.3g} s per step), {p.fps:g} fps, {result.steps_per_frame} solver steps per frame\n")
     out.write(format_measures(m) + "\n")
+    if m.max_tracking_error > REACH_WARNING:
+        print(f"{PROG}: warning: some targets stayed {_mm(m.max_tracking_error)} away: the gait is partly out of "
+              "reach (try a shorter --step-length, a larger --pelvis-drop or a lower --cadence)", file=sys.stderr)
     if args.out:
         write_motion_bvh(args.out, result.motion, units=args.units, up=args.up)
         out.write(f"wrote {args.out} ({m.n_frames} frames, {args.units}, {args.up} up)\n")

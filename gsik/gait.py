@@ -71,6 +71,10 @@ class GaitError(GsikError, ValueError):
     """Walk parameters are invalid, or the skeleton lacks a site the gait needs."""
 
 
+#: Shortest time the trailing heel takes to rise fully [s]; a shorter double support raises it less.
+HEEL_RISE_TIME = 0.1
+#: Fewest frames a swing may last.
+MIN_SWING_FRAMES = 5
 #: (lowest, highest, unit) of every numeric field of :class:`WalkParameters`.
 WALK_RANGES = {
     "n_steps": (1, 10_000, "steps"),
@@ -99,7 +103,8 @@ class WalkParameters:
         step_length: Forward distance between consecutive footprints [m].
         step_height: Highest lift of the swinging foot [m].
         cadence: Steps per minute; a step lasts ``60 / cadence`` seconds.
-        fps: Frames per second of the output [1/s].
+        fps: Frames per second of the output [1/s]; a swing must span at
+            least :data:`MIN_SWING_FRAMES` frames.
         double_support: Fraction of each step with both feet planted (0 to 0.8).
         pelvis_drop: How much lower than at rest the pelvis walks [m]
             (bent knees let the legs reach the footprints with flat feet).
@@ -107,13 +112,15 @@ class WalkParameters:
         pelvis_bob: Up-down amplitude of the pelvis [m], highest at mid-stance.
         arm_swing: Forward/backward swing of the arms at full stride [rad].
         heel_rise: Pitch of the trailing foot about its toe when it lifts off
-            [rad]: its heel rises during double support.
+            [rad]: its heel rises during double support (proportionally
+            less when that lasts under :data:`HEEL_RISE_TIME`).
         toe_off: Extra toes-down pitch of the swinging foot early in the swing
             [rad]; the foot plants flat.
         lead_foot: The foot that swings first (``"left_foot"`` or ``"right_foot"``).
 
     Raises:
-        GaitError: a field out of its range, naming it and the range.
+        GaitError: a field out of its range, naming it and the range, or
+            too few frames per swing.
     """
 
     n_steps: int = 4
@@ -144,6 +151,10 @@ class WalkParameters:
             if f.name == "n_steps" and int(v) != v:
                 raise GaitError(f"walk parameter n_steps must be a whole number, got {v!r}")
             object.__setattr__(self, f.name, int(v) if f.name == "n_steps" else float(v))
+        swing_frames = self.fps * self.step_duration * (1.0 - self.double_support)
+        if swing_frames < MIN_SWING_FRAMES:
+            raise GaitError(f"walk parameters give {swing_frames:.3g} frames per swing (fps x step duration x "
+                            f"(1 - double_support)); need at least {MIN_SWING_FRAMES}: raise fps or lower cadence")
         if self.lead_foot not in FEET:
             raise GaitError(f"walk parameter lead_foot must be one of {choices(FEET)}, got {self.lead_foot!r}")
 
@@ -165,6 +176,10 @@ class WalkParameters:
     def replace(self, **changes) -> WalkParameters:
         """A copy with some fields changed (validated again)."""
         return replace(self, **changes)
+
+
+#: A walk whose targets stay farther than this from the solved pose [m] is partly out of reach.
+REACH_WARNING = 0.01
 
 
 class Footstep(NamedTuple):
@@ -319,6 +334,8 @@ def plan_walk(skeleton: Skeleton, params: WalkParameters | None = None) -> GaitP
     t0 = T  # lead-in: lower the pelvis and shift it over the first stance foot
     swing = (1.0 - params.double_support) * T
     heel = params.double_support * T  # the trailing heel rises while both feet are down
+    # A double support shorter than HEEL_RISE_TIME lifts the heel proportionally less, never abruptly.
+    heel_rise = params.heel_rise * min(1.0, heel / HEEL_RISE_TIME)
     total = t0 + (n + 1) * T
     n_frames = int(math.floor(total * params.fps + 1e-9)) + 1
     times = np.arange(n_frames) / params.fps
@@ -346,12 +363,12 @@ def plan_walk(skeleton: Skeleton, params: WalkParameters | None = None) -> GaitP
         toe = start + rest[foot][0] @ ball[foot]
         u = (times - (ts - heel)) / heel if heel > 0 else (times >= ts).astype(float)
         rising = (times >= ts - heel) & (times < ts)
-        pitch_rise = params.heel_rise * _min_jerk(u)
+        pitch_rise = heel_rise * _min_jerk(u)
         foot_pitch[foot][rising] = -pitch_rise[rising]
         for i in np.flatnonzero(rising):
             foot_pos[foot][i] = toe + _rot_x(-pitch_rise[i]) @ (start - toe)
-        lift = toe + _rot_x(-params.heel_rise) @ (start - toe) if heel > 0 else start
-        lift_pitch = params.heel_rise if heel > 0 else 0.0
+        lift = toe + _rot_x(-heel_rise) @ (start - toe) if heel > 0 else start
+        lift_pitch = heel_rise if heel > 0 else 0.0
         s = (times - ts) / swing
         during = times >= ts
         ramp = _min_jerk(s)
@@ -383,7 +400,8 @@ def plan_walk(skeleton: Skeleton, params: WalkParameters | None = None) -> GaitP
         kz.append((plant, walk_z - bob))
     kx.append((total, centre_x))
     ky.append((total, ky[-1][1]))
-    kz.append((total, rest_z))
+    # Back to rest height once the feet are side by side again (a single step leaves them a stride apart).
+    kz.append((total, rest_z if n >= 2 else walk_z))
     pelvis = np.stack([_pchip(*zip(*knots), times) for knots in (kx, ky, kz)], axis=1)
     pelvis_shift = pelvis - rest["pelvis"][1]
 

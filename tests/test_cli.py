@@ -227,6 +227,12 @@ def test_walk_bad_parameter_is_an_error_naming_it(capsys):
     assert "expected a finite number" in capsys.readouterr().err
 
 
+def test_walk_warns_when_the_gait_is_out_of_reach(capsys):
+    code, _ = run("walk", "--steps", "2", "--step-length", "0.6", "--fps", "30")
+    assert code == 0
+    assert "gsik: warning: some targets stayed" in capsys.readouterr().err
+
+
 def test_walk_into_a_missing_folder_is_an_error(tmp_path, capsys):
     assert run("walk", "--out", str(tmp_path / "no" / "walk.bvh"))[0] == 2
     assert "does not exist" in capsys.readouterr().err

@@ -6,11 +6,14 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 import gsik
 from gsik.gait import (
     FEET,
     GAIT_SITES,
+    HEEL_RISE_TIME,
     GaitError,
     WalkParameters,
     continuity,
@@ -67,6 +70,12 @@ def test_walk_parameters_are_gsik_errors_and_value_errors():
         WalkParameters(cadence=-1)
     with pytest.raises(ValueError):
         WalkParameters(cadence=-1)
+
+
+def test_walk_parameters_need_enough_frames_per_swing():
+    with pytest.raises(GaitError, match="frames per swing"):
+        WalkParameters(fps=5, cadence=120)
+    assert WalkParameters(fps=10, cadence=100, double_support=0.0).fps == 10
 
 
 def test_step_duration_follows_cadence():
@@ -147,6 +156,38 @@ def test_plan_targets_move_smoothly(biped):
     assert step.max() <= fastest * 1.05
     accel = np.linalg.norm(np.diff(plan.positions, n=2, axis=0), axis=2)
     assert accel.max() < 0.01  # [m / frame^2]: velocities have no jumps either
+
+
+@settings(max_examples=25, deadline=None)
+@given(n_steps=st.integers(1, 5), step_length=st.floats(0.0, 0.5), cadence=st.floats(60, 140),
+       fps=st.sampled_from([24.0, 30.0, 60.0, 120.0]), double_support=st.floats(0.0, 0.5),
+       lead=st.sampled_from(FEET))
+def test_plan_properties_hold_for_any_parameters(biped, n_steps, step_length, cadence, fps, double_support, lead):
+    p = WalkParameters(n_steps=n_steps, step_length=step_length, cadence=cadence, fps=fps,
+                       double_support=double_support, lead_foot=lead)
+    # The heel rises within the double support: sampled in fewer than 5 frames it is a short bump.
+    assume(double_support == 0 or double_support * p.step_duration * fps >= 5)
+    plan = plan_walk(biped, p)
+    assert np.all(np.isfinite(plan.positions)) and np.all(np.isfinite(plan.rotations))
+    assert plan.n_frames == int(math.floor(p.duration * fps + 1e-9)) + 1
+    runs = _runs(plan.roots)
+    assert len(runs) == n_steps + 1 and all(a != b for a, b in zip(runs, runs[1:]))
+    assert plan.footsteps[0].foot == lead
+    # Continuous: no target moves farther in one frame than the swinging foot's peak speed allows
+    # (min-jerk carry over the stride plus the heel lift, the lift's steepest slope, the heel rise about
+    # the ball of the foot, and the upper body)...
+    swing = (1 - double_support) * p.step_duration
+    heel_rise = 1.875 * p.heel_rise / HEEL_RISE_TIME * 0.12
+    fastest = ((1.875 * (2 * step_length + 0.05) + 3.1 * p.step_height) / swing + heel_rise + 1.2) / fps
+    step = np.linalg.norm(np.diff(plan.positions, axis=0), axis=2)
+    assert step.max() <= fastest
+    # ... and no frame's move is a spike against both of its neighbours (a jump would be).
+    inner = step[1:-1]
+    assert np.all(inner <= 2.5 * np.maximum(step[:-2], step[2:]) + 1e-4)
+    # Every footprint lies on the floor, straight ahead of where the foot started.
+    for s in plan.footsteps:
+        assert s.end[2] == pytest.approx(s.start[2]) and s.end[0] == pytest.approx(s.start[0])
+        assert s.heel_frame <= s.lift_frame < s.plant_frame < s.swap_frame
 
 
 def test_plan_targets_use_no_root_and_cover_every_other_site(biped):
@@ -246,6 +287,15 @@ def test_format_measures_names_the_figures(measures):
     text = format_measures(measures)
     for words in ("root swap", "median", "stance foot slide", "footprint error", "finite"):
         assert words in text
+
+
+def test_a_single_step_walk_ends_in_a_stride_and_stays_in_reach(biped):
+    r = walk(biped, WalkParameters(n_steps=1))
+    m = measure_walk(r)
+    assert m.n_swaps == 1 and m.root_slide < 1e-9 and m.max_tracking_error < 5e-3
+    P = r.motion.positions()
+    gap = P[-1, biped.frame_of("left_foot"), 1] - P[-1, biped.frame_of("right_foot"), 1]
+    assert gap == pytest.approx(0.4, abs=3e-3)
 
 
 def test_walk_frames_can_stop_at_any_frame_leaving_that_pose(biped):
