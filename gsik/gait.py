@@ -27,6 +27,8 @@ walk goes along the skeleton's +y axis from the rest pose where the
 skeleton's definition places it.
 
 Example:
+    >>> import gsik
+    >>> from gsik.gait import WalkParameters, measure_walk, walk
     >>> result = walk(gsik.load_skeleton("biped"), WalkParameters(n_steps=4))
     >>> measure_walk(result).swap_jump_ratio < 3
     True
@@ -515,7 +517,8 @@ def walk_frames(solver: Solver, plan: GaitPlan, steps_per_frame: int = WALK_STEP
         plan: From :func:`plan_walk`.
         steps_per_frame: Solver steps (linearisations) per frame, >= 1.
     """
-    if int(steps_per_frame) != steps_per_frame or steps_per_frame < 1:
+    if isinstance(steps_per_frame, bool) or not isinstance(steps_per_frame, (int, np.integer)) \
+            or steps_per_frame < 1:
         raise GaitError(f"steps_per_frame must be a whole number >= 1, got {steps_per_frame!r}")
     skeleton = solver.skeleton
     if skeleton.frame_names != plan.skeleton.frame_names:
@@ -538,8 +541,7 @@ def walk_frames(solver: Solver, plan: GaitPlan, steps_per_frame: int = WALK_STEP
             result = solver.step()
             sweeps += result.sweeps
             if result.status is Status.CONVERGED:
-                # Stepping a converged pose only grows the adaptive damping (rounding-level "increases").
-                break
+                break  # within tolerance: more steps this frame would change nothing
         yield WalkFrame(i, solver.root, solver.world_from_root, result, sweeps)
 
 

@@ -13,6 +13,8 @@ change (a settled pose must not creep or oscillate) and whether any NaN
 appeared.
 
 Example:
+    >>> import gsik
+    >>> from gsik.scenarios import builtin_scenario, run_scenario
     >>> sk = gsik.load_skeleton("biped")
     >>> report = run_scenario(builtin_scenario(sk, "kneel"))
     >>> report.settled, report.max_position_error < 1e-3
