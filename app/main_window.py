@@ -727,7 +727,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _play_tick(self) -> None:
         pb = self.playback
-        if pb is None or not pb.advance():
+        try:
+            more = pb is not None and not pb.finished and pb.advance()
+        except gsik.GsikError as exc:
+            self.statusBar().showMessage(f"Playback stopped: {exc}", 8000)
+            more = False
+        if not more:
             self.stop_playback()
             return
         self._frame_times.append(time.perf_counter())

@@ -189,6 +189,7 @@ class Document:
         self.needs_solving = True
         self._targets: dict[str, TargetPose] = {}
         self._solver_targets: dict[str, tuple[TargetPose, gsik.Target]] = {}
+        self._playback: Playback | None = None
         self._root_position = (0.0, 0.0, 0.0)
         self._root_orientation = (1.0, 0.0, 0.0, 0.0)
         self._initial = self._standing_pose({})
@@ -308,8 +309,15 @@ class Document:
         return out
 
     # -- commands --------------------------------------------------------------
+    def _interrupt_playback(self) -> None:
+        """An edit, undo, redo or load ends a running playback first (recorded as its own undo step)."""
+        pb = self._playback
+        if pb is not None and not pb.finished and not pb.applying:
+            pb.stop()
+
     def _edit(self, text: str, apply: Callable[[], None], merge_key: object | None = None,
               kind: str = "pose") -> None:
+        self._interrupt_playback()
         merging = self.history.would_merge(merge_key)
         before = None if merging else self.pose()  # a merged move keeps the drag's first "before"
         apply()
@@ -479,6 +487,7 @@ class Document:
 
     def undo(self) -> bool:
         """Undo the last edit exactly; False when there is none."""
+        self._interrupt_playback()
         if not self.history.can_undo:
             return False
         cmd = self.history.commands[self.history.index - 1]
@@ -491,6 +500,7 @@ class Document:
 
     def redo(self) -> bool:
         """Redo the last undone edit exactly; False when there is none."""
+        self._interrupt_playback()
         if not self.history.can_redo:
             return False
         cmd = self.history.commands[self.history.index]
@@ -531,6 +541,7 @@ class Document:
         the document is left exactly as it was.
         """
         read: PoseRead = read_pose(path, self.skeleton)
+        self._interrupt_playback()
         self._restore(read.pose)
         self.history.clear()
         self.path = str(path)
@@ -555,6 +566,7 @@ class Document:
 
     def new(self) -> None:
         """The standing pose, no file, empty history."""
+        self._interrupt_playback()
         self._restore(self._standing_pose({}))
         self.history.clear()
         self.path = None
@@ -563,8 +575,15 @@ class Document:
     # -- playback (hook for walks and scenarios) -------------------------------
     def playback(self, frames: Motion | Sequence[Mapping[str, gsik.Target | TargetPose | None]],
                  text: str = "Play", frame_time: float = 1 / 30) -> Playback:
-        """A :class:`Playback` of a :class:`gsik.motion.Motion` or of a sequence of target dicts."""
-        return Playback(self, frames, text, frame_time)
+        """A :class:`Playback` of a :class:`gsik.motion.Motion` or of a sequence of target dicts.
+
+        A playback running already is stopped first. Any edit, undo, redo or
+        load while it runs stops it (what was played so far stays, as one step).
+        """
+        self._interrupt_playback()
+        pb = Playback(self, frames, text, frame_time)
+        self._playback = pb
+        return pb
 
 
 class Playback:
@@ -596,6 +615,7 @@ class Playback:
         self.index = 0
         self.before = doc.pose()
         self.finished = False
+        self.applying = False
 
     def advance(self) -> bool:
         """Show the next frame; False when there is none (the playback then finishes)."""
@@ -605,6 +625,16 @@ class Playback:
             self.stop()
             return False
         doc = self.doc
+        self.applying = True
+        try:
+            self._apply(doc)
+        finally:
+            self.applying = False
+        self.index += 1
+        doc.changed.emit("pose")
+        return True
+
+    def _apply(self, doc: Document) -> None:
         if self.motion is not None:
             m = self.motion
             root = m.roots[self.index]
@@ -622,7 +652,9 @@ class Playback:
         else:
             frame = self.target_frames[self.index]
             for name, t in frame.items():
-                old = doc._effector(name)
+                old = doc._targets.get(name)
+                if old is None:  # not an effector of the current root (the root itself): nothing to drive
+                    continue
                 if t is None:
                     doc._targets[name] = old.replace(enabled=False)
                 elif isinstance(t, TargetPose):
@@ -633,15 +665,14 @@ class Playback:
                                                     t.position_only or t.orientation is None)
             doc._push_targets()
             doc.step()
-        self.index += 1
-        doc.changed.emit("pose")
-        return True
 
     def stop(self) -> None:
         """End the playback here and record it as one undo step."""
         if self.finished:
             return
         self.finished = True
+        if self.doc._playback is self:
+            self.doc._playback = None
         self.doc.history.push(Command(self.text, self.before))
         self.doc.needs_solving = True
         self.doc._emit_all()

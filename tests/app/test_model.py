@@ -324,3 +324,24 @@ def test_playback_of_target_frames_steps_the_solver(doc):
     hand = doc.effector_poses()["left_hand"][:3, 3]
     assert np.linalg.norm(hand - (start + [0.0, 0.4, 0.4])) < np.linalg.norm(start - (start + [0.0, 0.4, 0.4]))
     assert doc.history.undo_text == "Reach"
+
+
+def test_an_edit_during_playback_stops_it_and_both_are_undoable(doc):
+    start = np.array(doc.targets["left_foot"].position)
+    frames = [{"left_foot": gsik.Target(start + [0.0, 0.0, 0.01 * k])} for k in range(1, 30)]
+    before = doc.pose()
+    pb = doc.playback(frames, "Lift")
+    for _ in range(5):
+        assert pb.advance()
+    doc.set_root("left_foot")  # the played effector becomes the root
+    assert pb.finished and not pb.advance()
+    assert [c.text for c in doc.history.commands] == ["Lift", "Root on left_foot"]
+    # A playback whose effector is now the root skips it instead of failing.
+    pb2 = doc.playback(frames, "Lift again")
+    while pb2.advance():
+        pass
+    assert doc.history.undo_text == "Lift again"
+    doc.undo()
+    doc.undo()
+    doc.undo()
+    assert doc.pose() == before

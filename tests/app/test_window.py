@@ -392,3 +392,52 @@ def test_animated_scenario_plays_its_frames(qtbot, window):
     hand = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("right_hand")]
     head = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("head")]
     assert hand[2] > head[2] - 0.2  # the waving hand is up near the head or above it
+
+
+def test_dragging_a_face_of_the_rotate_box_turns_the_selected_target(qtbot, window):
+    doc = window.doc
+    window.viewport.select("pelvis")
+    t0 = doc.targets["pelvis"]
+    from app.viewport import BOX_SIZE
+
+    # A point on the box's front face (+y, towards the camera), off the sphere in the middle.
+    corner = np.array(t0.position) + t0.rotation @ [0.3 * BOX_SIZE, 0.5 * BOX_SIZE, -0.3 * BOX_SIZE]
+    _drag(window, corner, (60, 25))
+    t1 = doc.targets["pelvis"]
+    np.testing.assert_allclose(t1.position, t0.position, atol=1e-12)  # turned, not moved
+    angle = np.degrees(np.arccos(np.clip((np.trace(t0.rotation.T @ t1.rotation) - 1) / 2, -1, 1)))
+    assert angle > 5.0
+    assert doc.history.undo_text == "Rotate pelvis" and len(doc.history.commands) == 1
+
+
+def test_view_presets_and_frame_all(qtbot, window):
+    from PySide6 import QtCore
+
+    window.act_views["front"].trigger()
+    cam = window.plotter.camera
+    d = np.array(cam.position) - np.array(cam.focal_point)
+    assert d[1] > 0 and abs(d[0]) < 1e-9  # in front of the character (it faces +y)
+    window.act_views["top"].trigger()
+    d = np.array(cam.position) - np.array(cam.focal_point)
+    assert d[2] > 0 and np.hypot(d[0], d[1]) < 1e-9
+    cam.position = np.array(cam.focal_point) + 50 * d / np.linalg.norm(d)  # zoomed far out
+    qtbot.keyClick(window, QtCore.Qt.Key_F)
+    assert np.linalg.norm(np.array(cam.position) - np.array(cam.focal_point)) < 10
+
+
+def test_window_geometry_and_solver_settings_are_remembered(qtbot, studio_settings):
+    from app.main_window import MainWindow
+
+    w = MainWindow(settings=studio_settings)
+    w.resize(1111, 777)
+    w.show()
+    qtbot.waitExposed(w)
+    w.sweeps.setValue(17)
+    assert w.doc.settings.sweeps == 17
+    w.close()
+    w2 = MainWindow(settings=studio_settings)
+    try:
+        assert (w2.width(), w2.height()) == (1111, 777)
+        assert w2.doc.settings.sweeps == 17 and w2.sweeps.value() == 17
+    finally:
+        w2.close()
