@@ -12,6 +12,7 @@ pose between edits, and redo gives back the settled pose, not a guess).
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -222,8 +223,6 @@ class Document:
 
     @property
     def title(self) -> str:
-        import os
-
         return os.path.basename(self.path) if self.path else "Untitled"
 
     def pose(self) -> Pose:

@@ -144,6 +144,7 @@ class Viewport:
         self.selected: str | None = None
         self._drag_counter = itertools.count(1)
         self._drag: int | None = None
+        self._drag_kind: str | None = None  # "move" (a sphere) or "rotate" (the box) while the mouse drags
         self._syncing = False
         sk = doc.skeleton
         self._sites = tuple(sk.effector_sites)
@@ -304,6 +305,7 @@ class Viewport:
     # -- input -----------------------------------------------------------------
     def _on_drag_start(self, name: str, widget) -> None:
         self._drag = next(self._drag_counter)
+        self._drag_kind = "move"
         self.select(name)
         self.drag_started.emit(name)
 
@@ -315,10 +317,13 @@ class Viewport:
     def _on_drag_end(self, name: str, widget) -> None:
         self.doc.end_drag()
         self._drag = None
+        self._drag_kind = None
+        self.sync_targets()
         self.drag_finished.emit(name)
 
     def _on_rotate_start(self) -> None:
         self._drag = next(self._drag_counter)
+        self._drag_kind = "rotate"
 
     def _on_rotate_move(self) -> None:
         name = self.selected
@@ -336,6 +341,8 @@ class Viewport:
     def _on_rotate_end(self) -> None:
         self.doc.end_drag()
         self._drag = None
+        self._drag_kind = None
+        self.sync_targets()
 
     def select(self, name: str | None) -> None:
         """Select a target (shows its rotate box and label); ``None`` clears."""
@@ -425,12 +432,12 @@ class Viewport:
                     continue
                 if not w.GetEnabled():
                     w.On()
-                if self._drag is None or name != self.selected:
+                if not (self._drag_kind == "move" and name == self.selected):  # the dragged one moves itself
                     w.SetCenter(*t.position)
                 w.GetSphereProperty().SetColor(TARGET_SELECTED_COLOR if name == self.selected else TARGET_COLOR)
             t = targets.get(self.selected) if self.selected else None
             if t is not None and t.enabled:
-                if self._drag is None:
+                if self._drag_kind != "rotate":  # the box being turned turns itself
                     tr = vtk.vtkTransform()
                     M = np.eye(4)
                     M[:3, :3] = t.rotation

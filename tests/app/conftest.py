@@ -8,7 +8,9 @@ needed. If the ``Xvfb`` program is missing the GUI tests are skipped, saying so.
 
 Xvfb is started with ``-terminate``: it exits by itself when its last client (this
 test process) disconnects, so it never outlives the tests, and it is never killed
-under a live Qt connection (which would make Qt abort the process).
+under a live Qt connection (which would make Qt abort the process). Tests that run
+the app in a subprocess also request ``qapp``, so this process is connected first
+and a subprocess leaving does not end the server.
 """
 
 from __future__ import annotations

@@ -309,7 +309,7 @@ def test_joints_on_a_limit_are_highlighted(qtbot, window):
     assert not np.array_equal(colors[sk.joint_names.index("right_elbow")], _rgb8(LIMIT_COLOR))
 
 
-def test_screenshot_command_line_renders_a_png_and_exits(x_display, tmp_path):
+def test_screenshot_command_line_renders_a_png_and_exits(qapp, x_display, tmp_path):
     out = tmp_path / "shot.png"
     env = dict(os.environ, DISPLAY=x_display, QT_QPA_PLATFORM="xcb")
     r = subprocess.run([sys.executable, "-m", "app", "--screenshot", str(out), "--size", "960x640"],
@@ -321,7 +321,7 @@ def test_screenshot_command_line_renders_a_png_and_exits(x_display, tmp_path):
     assert (img.width(), img.height()) == (960, 640)
 
 
-def test_screenshot_command_line_reports_a_bad_pose(x_display, tmp_path):
+def test_screenshot_command_line_reports_a_bad_pose(qapp, x_display, tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("format: 1\nskeleton: robot\n")
     out = tmp_path / "shot.png"
@@ -331,7 +331,7 @@ def test_screenshot_command_line_reports_a_bad_pose(x_display, tmp_path):
     assert r.returncode == 1 and "bad.yaml" in r.stderr and not out.exists()
 
 
-def test_many_qt_calls_do_not_exhaust_none(x_display):
+def test_many_qt_calls_do_not_exhaust_none(qapp, x_display):
     """PySide6 6.12 on Python 3.11 drops a reference to None per void call; the app guards against it."""
     code = ("import sys; from app.qt_compat import protect_none; assert protect_none(); "
             "from PySide6 import QtWidgets; app = QtWidgets.QApplication([]); w = QtWidgets.QLabel(); "
@@ -441,3 +441,15 @@ def test_window_geometry_and_solver_settings_are_remembered(qtbot, studio_settin
         assert w2.doc.settings.sweeps == 17 and w2.sweeps.value() == 17
     finally:
         w2.close()
+
+
+def test_rotate_box_follows_the_selected_target_after_a_drag(qtbot, window):
+    import vtk
+
+    name = "left_hand"
+    window.viewport.select(name)
+    _drag(window, window.doc.targets[name].position, (40, 40))
+    t = vtk.vtkTransform()
+    window.viewport.box_widget.GetTransform(t)
+    centre = [t.GetMatrix().GetElement(i, 3) for i in range(3)]
+    np.testing.assert_allclose(centre, window.doc.targets[name].position, atol=1e-9)
