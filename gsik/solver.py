@@ -52,7 +52,8 @@ class SolverSettings:
             [rad] below which a pose counts as no longer changing.
         max_step: Largest change of any one angle in one step [rad]; 0 for none.
         adaptive_damping: Halve or refuse a step that raises the error and
-            raise the damping (Levenberg-Marquardt); off gives the paper's
+            raise the damping (Levenberg-Marquardt); while steps succeed the
+            damping falls, down to ``damping / 10``. Off gives the paper's
             plain fixed-delta method.
         settle_tolerance: With adaptive damping, a step that lowers the
             weighted error by less than this fraction is not taken: the pose
