@@ -7,9 +7,11 @@ installed) only: gsik never imports Qt, PyVista or VTK.
 
 from gsik.errors import (
     BvhError,
+    GaitError,
     GsikError,
     GsikFileError,
     PoseError,
+    ScenarioError,
     SkeletonError,
     SolverError,
     TargetError,
@@ -23,7 +25,7 @@ from gsik.targets import Target
 __version__ = "0.1.0"
 
 __all__ = [
-    "BvhError", "GsikError", "GsikFileError", "PoseError", "SkeletonError", "SolverError", "TargetError",
+    "BvhError", "GaitError", "GsikError", "ScenarioError", "GsikFileError", "PoseError", "SkeletonError", "SolverError", "TargetError",
     "UrdfError", "JointSpec", "RotationSpec", "SegmentSpec", "SiteSpec", "Skeleton", "build_skeleton",
     "bundled_skeletons", "load_skeleton", "skeleton_from_dict", "skeleton_from_yaml", "SolveResult", "Solver",
     "SolverSettings", "Status", "Target", "__version__",

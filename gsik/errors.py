@@ -47,6 +47,14 @@ class UrdfError(GsikError, ValueError):
     """A URDF robot description is malformed or uses an unsupported feature."""
 
 
+class GaitError(GsikError, ValueError):
+    """Walk parameters are invalid, or the skeleton lacks a site the gait needs."""
+
+
+class ScenarioError(GsikError, ValueError):
+    """An unknown scenario, a skeleton a scenario does not fit, or bad run settings."""
+
+
 class GsikFileError(GsikError, OSError):
     """A file could not be read or written (permission, missing folder, full disk).
 

@@ -43,7 +43,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik.errors import GsikError, choices
+from gsik.errors import GaitError, choices
 from gsik.kinematics import world_frames
 from gsik.motion import Motion
 from gsik.rotations import angle_between, matrix_from_axis_angle
@@ -67,10 +67,6 @@ WALK_SETTINGS = SolverSettings()
 WALK_STEPS_PER_FRAME = 2
 _FORWARD = np.array([0.0, 1.0, 0.0])
 _UP = np.array([0.0, 0.0, 1.0])
-
-
-class GaitError(GsikError, ValueError):
-    """Walk parameters are invalid, or the skeleton lacks a site the gait needs."""
 
 
 #: Shortest time the trailing heel takes to rise fully [s]; a shorter double support raises it less.

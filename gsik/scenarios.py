@@ -31,18 +31,16 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik.errors import GsikError, choices
+
+from gsik.errors import ScenarioError, choices
 from gsik.kinematics import world_frames
 from gsik.motion import Motion
 from gsik.pose import Pose, TargetPose
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix, transform
 from gsik.skeleton import Skeleton
-from gsik.solver import Solver, SolverSettings, Status
+from gsik.solver import (Solver, SolverSettings, Status, errors_by_effector, max_orientation_error,
+                         max_position_error)
 from gsik.targets import Target
-
-
-class ScenarioError(GsikError, ValueError):
-    """An unknown scenario, a skeleton a scenario does not fit, or bad run settings."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -340,18 +338,14 @@ class ScenarioReport(NamedTuple):
     ms_per_frame: float
     motion: Motion
 
-    @property
-    def max_position_error(self) -> float:
-        return float(self.position_errors.max(initial=0.0))
-
-    @property
-    def max_orientation_error(self) -> float:
-        return float(self.orientation_errors.max(initial=0.0))
+    max_position_error = property(lambda self: max_position_error(self),
+                                  doc="Largest final position error [m].")
+    max_orientation_error = property(lambda self: max_orientation_error(self),
+                                     doc="Largest final orientation error [rad].")
 
     def errors(self) -> dict[str, tuple[float, float]]:
         """``{effector: (position error [m], orientation error [rad])}``."""
-        return {n: (float(p), float(o)) for n, p, o in zip(self.effector_names, self.position_errors,
-                                                           self.orientation_errors)}
+        return errors_by_effector(self)
 
 
 _SETTLED = (Status.CONVERGED, Status.STALLED)

@@ -177,20 +177,31 @@ class SolveResult(NamedTuple):
     def converged(self) -> bool:
         return self.status is Status.CONVERGED
 
-    @property
-    def max_position_error(self) -> float:
-        """Largest position error [m]."""
-        return float(self.position_errors.max(initial=0.0))
-
-    @property
-    def max_orientation_error(self) -> float:
-        """Largest orientation error [rad]."""
-        return float(self.orientation_errors.max(initial=0.0))
+    max_position_error = property(lambda self: max_position_error(self), doc="Largest position error [m].")
+    max_orientation_error = property(lambda self: max_orientation_error(self),
+                                     doc="Largest orientation error [rad].")
 
     def errors(self) -> dict[str, tuple[float, float]]:
         """``{effector: (position error [m], orientation error [rad])}``."""
-        return {n: (float(p), float(o)) for n, p, o in zip(self.effector_names, self.position_errors,
-                                                           self.orientation_errors)}
+        return errors_by_effector(self)
+
+
+# Summaries of any result holding effector_names, position_errors and orientation_errors
+# (NamedTuples cannot share a mixin, so the results share these functions).
+def max_position_error(result) -> float:
+    """Largest position error [m] of a result."""
+    return float(result.position_errors.max(initial=0.0))
+
+
+def max_orientation_error(result) -> float:
+    """Largest orientation error [rad] of a result."""
+    return float(result.orientation_errors.max(initial=0.0))
+
+
+def errors_by_effector(result) -> dict[str, tuple[float, float]]:
+    """``{effector: (position error [m], orientation error [rad])}`` of a result."""
+    return {n: (float(p), float(o)) for n, p, o in zip(result.effector_names, result.position_errors,
+                                                       result.orientation_errors)}
 
 
 _STATUSES = (Status.CONVERGED, Status.STALLED, Status.BUDGET_EXHAUSTED)
