@@ -18,7 +18,8 @@ from __future__ import annotations
 import os
 import select
 import shutil
-import subprocess
+import signal
+import tempfile
 import time
 
 import pytest
@@ -27,8 +28,10 @@ SCREEN = "1600x1100x24"
 
 
 class _Xvfb:
+    """Xvfb started with posix_spawn: no Popen object is left to complain that it outlives the tests."""
+
     def __init__(self):
-        self.process: subprocess.Popen | None = None
+        self.pid: int | None = None
         self.display: str | None = None
         self.error: str | None = None
 
@@ -38,12 +41,22 @@ class _Xvfb:
             self.error = "Xvfb is not installed (Debian: apt-get install xvfb); the GUI tests need an X server"
             return
         read_fd, write_fd = os.pipe()
+        log = tempfile.TemporaryFile()
         try:
-            self.process = subprocess.Popen(
-                [exe, "-displayfd", str(write_fd), "-screen", "0", SCREEN, "-nolisten", "tcp", "-terminate"],
-                pass_fds=(write_fd,), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-        finally:
+            os.set_inheritable(write_fd, True)
+            argv = [exe, "-displayfd", str(write_fd), "-screen", "0", SCREEN, "-nolisten", "tcp", "-terminate"]
+            self.pid = os.posix_spawn(exe, argv, os.environ, file_actions=[
+                (os.POSIX_SPAWN_OPEN, 0, os.devnull, os.O_RDONLY, 0),
+                (os.POSIX_SPAWN_DUP2, log.fileno(), 1),
+                (os.POSIX_SPAWN_DUP2, log.fileno(), 2),
+            ])
+        except OSError as exc:
+            os.close(read_fd)
             os.close(write_fd)
+            log.close()
+            self.error = f"Xvfb could not be started: {exc}"
+            return
+        os.close(write_fd)
         data = b""
         deadline = time.monotonic() + 20.0
         try:
@@ -54,27 +67,38 @@ class _Xvfb:
                     if not chunk:
                         break
                     data += chunk
-                elif self.process.poll() is not None:
+                elif self._exited():
                     break
         finally:
             os.close(read_fd)
         if not data.strip().isdigit():
-            err = b""
-            if self.process.poll() is not None and self.process.stderr is not None:
-                err = self.process.stderr.read()[-500:]
+            log.seek(0)
+            err = log.read()[-500:].decode(errors="replace").strip()
             self.stop()
-            self.error = f"Xvfb did not start: {err.decode(errors='replace').strip() or 'no display number'}"
-            return
-        self.display = ":" + data.decode().strip()
+            self.error = f"Xvfb did not start: {err or 'no display number'}"
+        else:
+            self.display = ":" + data.decode().strip()
+        log.close()
+
+    def _exited(self) -> bool:
+        if self.pid is None:
+            return True
+        pid, _status = os.waitpid(self.pid, os.WNOHANG)
+        if pid:
+            self.pid = None
+        return pid != 0
 
     def stop(self) -> None:
-        if self.process is not None and self.process.poll() is None:
-            self.process.terminate()
-            try:
-                self.process.wait(5)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-        self.process = None
+        if self.pid is None or self._exited():
+            return
+        os.kill(self.pid, signal.SIGTERM)
+        deadline = time.monotonic() + 5.0
+        while not self._exited() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        if self.pid is not None:
+            os.kill(self.pid, signal.SIGKILL)
+            os.waitpid(self.pid, 0)
+            self.pid = None
 
 
 _xvfb = _Xvfb()
