@@ -91,7 +91,7 @@ class SolverSettings:
     position_tolerance: float = 1e-4
     orientation_tolerance: float = 1e-3
     max_iterations: int = 200
-    solve_sweeps: int = 60
+    solve_sweeps: int = 5
     restarts: int = 20
     seed: int = 0
 
@@ -253,6 +253,7 @@ class Solver:
         self._W = W
         self._targets: dict[str, Target] = {}
         self._args = None
+        self._solve_vector_for = None
         self._x = np.zeros(skeleton.n_dofs)
         self._lam = np.array([self._settings.damping])
         self._set_topology(skeleton.root)
@@ -482,9 +483,19 @@ class Solver:
         start = self._q.copy()
         stats = self._solve_from(start)
         attempts = 1
+        if stats[_kernels.O_STATUS] != _kernels.CONVERGED and s.restarts > 0:
+            stats, attempts = self._restart(start, stats)
+        self._x[:] = 0.0
+        self._lam[0] = s.damping
+        return self._result(stats, _kernels.O_COST, attempts)
+
+    def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
+        """Further attempts after a failed first one; leaves the best attempt as the state."""
+        s = self._settings
+        sk = self._skeleton
         best = (stats[_kernels.O_COST], self._q.copy(), stats)
         rng = np.random.default_rng(s.seed)
-        sk = self._skeleton
+        attempts = 1
         while stats[_kernels.O_STATUS] != _kernels.CONVERGED and attempts <= s.restarts:
             if attempts == 1:
                 stats = self._solve_by_continuation(start)
@@ -495,20 +506,20 @@ class Solver:
             attempts += 1
             if stats[_kernels.O_STATUS] == _kernels.CONVERGED or stats[_kernels.O_COST] < best[0]:
                 best = (stats[_kernels.O_COST], self._q.copy(), stats)
-        _, q, stats = best
-        self._q[:] = q
-        self._x[:] = 0.0
-        self._lam[0] = s.damping
-        # Recompute frames and errors at the kept pose.
-        self._solve_from(q, iterations=0)
-        return self._result(stats, _kernels.O_COST, attempts)
+        if best[2] is not stats:
+            # An earlier attempt was best: make it the state again (frames and errors included).
+            self._solve_from(best[1], iterations=0)
+        return best[2], attempts
 
     def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
         s = self._settings
+        if self._solve_vector_for is not s:
+            self._solve_vector = s.vector(sweeps=s.solve_sweeps)
+            self._solve_vector_for = s
         self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
         stats = np.zeros(_kernels.N_STATS)
         _kernels.solve(self._model, self._topo.root_frame, self._W, self._tp, self._tR, self._row_w, self._q,
-                       s.vector(sweeps=s.solve_sweeps), s.max_iterations if iterations is None else iterations,
+                       self._solve_vector, s.max_iterations if iterations is None else iterations,
                        self._R, self._p, self._err, stats, self._work)
         return stats
 

@@ -701,6 +701,8 @@ def random_clips(draw) -> BvhClip:
             name = draw(st.from_regex(r"[A-Za-z][A-Za-z0-9_:.\-]{0,8}", fullmatch=True))
             if any(j.name == name for j in joints) or name.endswith("_end"):
                 name = f"j{i}"
+                while any(j.name == name for j in joints):  # a drawn name may already be "j<i>"
+                    name += "x"
         channels = () if ends_here else tuple(
             draw(st.lists(st.sampled_from(CHANNEL_NAMES), unique=True, max_size=6).flatmap(st.permutations))
         )
