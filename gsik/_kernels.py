@@ -395,7 +395,7 @@ def _evaluate(model, q, root, W, target_p, target_R, row_w, R, p, e, err, M):
 def workspace_size(n_frames: int, n_dofs: int, n_effectors: int) -> int:
     """Length of the float scratch buffer :func:`step` and :func:`solve` carve up (see :func:`_carve`)."""
     n, m = n_dofs, n_effectors
-    return 6 * m + 6 * m * n + 2 * n * n + 7 * n + 12 * n_frames + 2 * m + 9 + 12 * n
+    return 6 * m + 2 * n * n + 6 * n + 12 * n_frames + 2 * m + 9 + 12 * n
 
 
 @njit(cache=True)
@@ -404,8 +404,6 @@ def _carve(work, n_frames, n, m):
     o = 0
     e = work[o:o + 6 * m]
     o += 6 * m
-    J = work[o:o + 6 * m * n].reshape((6 * m, n))
-    o += 6 * m * n
     A = work[o:o + n * n].reshape((n, n))
     o += n * n
     Al = work[o:o + n * n].reshape((n, n))
@@ -416,8 +414,7 @@ def _carve(work, n_frames, n, m):
     x_prev = work[o + 3 * n:o + 4 * n]
     q_new = work[o + 4 * n:o + 5 * n]
     x2 = work[o + 5 * n:o + 6 * n]
-    zero = work[o + 6 * n:o + 7 * n]
-    o += 7 * n
+    o += 6 * n
     R2 = work[o:o + 9 * n_frames].reshape((n_frames, 3, 3))
     o += 9 * n_frames
     p2 = work[o:o + 3 * n_frames].reshape((n_frames, 3))
@@ -427,7 +424,7 @@ def _carve(work, n_frames, n, m):
     M = work[o:o + 9].reshape((3, 3))
     o += 9
     v = work[o:o + 12 * n].reshape((2, n, 6))
-    return e, J, A, Al, b, lo, hi, x_prev, q_new, x2, zero, R2, p2, err2, M, v
+    return e, A, Al, b, lo, hi, x_prev, q_new, x2, R2, p2, err2, M, v
 
 
 @njit(cache=True)
@@ -442,8 +439,7 @@ def step(model, root, W, target_p, target_R, row_w, q, x, lam_state, settings, R
     """
     parent, offset, rotation, axis, dof, dof_frame, lower, upper, eff_frame, sign, eff_dofs, eff_n = model
     n = q.shape[0]
-    e, J, A, Al, b, lo, hi, x_prev, q_new, x2, zero, R2, p2, err2, M, v = _carve(work, R.shape[0], n,
-                                                                                  eff_frame.shape[0])
+    e, A, Al, b, lo, hi, x_prev, q_new, x2, R2, p2, err2, M, v = _carve(work, R.shape[0], n, eff_frame.shape[0])
     damping = settings[S_DAMPING]
     adaptive = settings[S_ADAPTIVE] > 0.0
     cost0 = effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err, M)
@@ -626,7 +622,7 @@ def solve(model, root, W, target_p, target_R, row_w, q, settings, max_iterations
     parent, offset, rotation, axis, dof, dof_frame, lower, upper, eff_frame, sign, eff_dofs, eff_n = model
     n = q.shape[0]
     m = eff_frame.shape[0]
-    e, J, A, Al, b, lo, hi, x_prev, q_try, x, zero, R2, p2, err2, M, v = _carve(work, R.shape[0], n, m)
+    e, A, Al, b, lo, hi, x_prev, q_try, x, R2, p2, err2, M, v = _carve(work, R.shape[0], n, m)
     x[:] = 0.0
     pgs_stats = np.zeros(N_STATS)
     damping = settings[S_DAMPING]

@@ -17,15 +17,16 @@ from gsik import _kernels
 from gsik._jit import njit
 from gsik.skeleton import Skeleton
 from gsik.skeleton_io import load_skeleton
-from gsik.solver import Solver
+from gsik.solver import PAPER_METHOD, Solver
 from gsik.targets import Target
 
 #: Kenwright (2012), Table 1: one frame step of the biped, C++, Intel i7-2600 [ms].
 PAPER_TABLE_1_MS = {1: 0.01, 5: 0.042, 20: 0.11}
 
+#: Tolerance tests off, so a step does exactly k sweeps.
+EXACT_SWEEPS = dict(residual_tolerance=0.0, update_tolerance=0.0, stall_tolerance=0.0)
 #: The paper's plain method (fixed damping, no safeguards), doing exactly k sweeps.
-PAPER_SETTINGS = dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0, settle_tolerance=0.0,
-                      residual_tolerance=0.0, update_tolerance=0.0, stall_tolerance=0.0)
+PAPER_SETTINGS = {**PAPER_METHOD, **EXACT_SWEEPS}
 
 
 def _targets(skeleton: Skeleton, q: np.ndarray, W: np.ndarray) -> dict[str, Target]:
@@ -94,8 +95,7 @@ def table_1(skeleton: Skeleton | None = None, repeats: int = 3000, seed: int = 0
     sk = skeleton or load_skeleton("biped")
     rng = np.random.default_rng(seed)
     out = []
-    for mode, extra in (("paper", PAPER_SETTINGS), ("default", dict(residual_tolerance=0.0, update_tolerance=0.0,
-                                                                    stall_tolerance=0.0))):
+    for mode, extra in (("paper", PAPER_SETTINGS), ("default", EXACT_SWEEPS)):
         for k in (1, 5, 20):
             solver = Solver(sk, sweeps=k, **extra)
             q_goal = np.clip(sk.rest + rng.normal(0, 0.05, sk.n_dofs), sk.lower, sk.upper)

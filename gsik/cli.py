@@ -26,6 +26,7 @@ from typing import TextIO
 
 import gsik
 from gsik.errors import GsikError
+from gsik.solver import PAPER_METHOD
 
 PROG = "gsik"
 
@@ -123,7 +124,7 @@ def _settings_overrides(args: argparse.Namespace) -> dict:
     if getattr(args, "sweeps", None) is not None:
         out["sweeps"] = args.sweeps
     if getattr(args, "paper", False):
-        out.update(adaptive_damping=False, subspace_minimization=False, max_step=0.0, settle_tolerance=0.0)
+        out.update(PAPER_METHOD)
     return out
 
 

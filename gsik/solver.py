@@ -13,6 +13,7 @@ import enum
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
+from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
@@ -20,7 +21,7 @@ import numpy as np
 from gsik import _kernels
 from gsik.errors import SolverError, TargetError, choices
 from gsik.kinematics import Topology, model_arrays, topology
-from gsik.rotations import transform
+from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix, transform
 from gsik.skeleton import Skeleton
 from gsik.targets import Target
 
@@ -34,6 +35,12 @@ class Status(enum.Enum):
     STALLED = "stalled"
     #: The iteration budget ran out while the pose was still improving.
     BUDGET_EXHAUSTED = "budget exhausted"
+
+
+#: The settings that turn the defaults into the paper's plain method: fixed delta, PGS sweeps only,
+#: no step limit, no adaptive damping, no settling, no subspace minimisation.
+PAPER_METHOD = MappingProxyType(dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0,
+                                     settle_tolerance=0.0))
 
 
 @dataclass(frozen=True)
@@ -116,10 +123,8 @@ class SolverSettings:
 
     @classmethod
     def paper(cls, **overrides) -> SolverSettings:
-        """Kenwright's plain method: fixed delta, PGS sweeps only, no step limit or safeguards."""
-        fields_ = dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0, settle_tolerance=0.0)
-        fields_.update(overrides)
-        return cls(**fields_)
+        """Kenwright's plain method (:data:`PAPER_METHOD`): fixed delta, PGS sweeps only, no safeguards."""
+        return cls(**{**PAPER_METHOD, **overrides})
 
     def vector(self, sweeps: int | None = None) -> np.ndarray:
         """The settings the kernels read, as a float vector."""
@@ -525,8 +530,6 @@ class Solver:
 
     def _solve_by_continuation(self, q0: np.ndarray, stages: int = 4) -> np.ndarray:
         """Approach the targets in ``stages`` from where the effectors are at ``q0``."""
-        from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix
-
         final_p, final_R = self._tp.copy(), self._tR.copy()
         self._q[:] = q0
         self._refresh_frames()
