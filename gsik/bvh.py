@@ -32,6 +32,7 @@ import numpy as np
 
 from gsik.errors import BvhError, choices
 from gsik.fileio import atomic_write_text, file_error
+from gsik.rotations import matrix_from_cos_sin
 
 #: The six BVH channel names, in canonical spelling.
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
@@ -724,15 +725,7 @@ def _cos_sin_deg(degrees: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _axis_rotation(axis: int, degrees: np.ndarray) -> np.ndarray:
     """(n, 3, 3) right-handed rotations by ``degrees`` (n,) about axis 0 (X), 1 (Y) or 2 (Z)."""
-    c, s = _cos_sin_deg(np.atleast_1d(degrees))
-    i, j = (axis + 1) % 3, (axis + 2) % 3  # the plane the rotation turns
-    R = np.zeros(c.shape + (3, 3))
-    R[:, axis, axis] = 1.0
-    R[:, i, i] = c
-    R[:, j, j] = c
-    R[:, i, j] = -s
-    R[:, j, i] = s
-    return R
+    return matrix_from_cos_sin(axis, *_cos_sin_deg(np.atleast_1d(degrees)))
 
 
 def bvh_local_rotations(clip: BvhClip) -> np.ndarray:

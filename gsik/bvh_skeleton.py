@@ -100,6 +100,7 @@ from gsik.errors import BvhError, choices
 from gsik.fileio import atomic_write_text
 from gsik.kinematics import world_frames
 from gsik.motion import Motion
+from gsik.rotations import matrix_from_axis_angle, matrix_from_cos_sin
 from gsik.skeleton import JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
 
 #: File units per metre for each ``units`` choice.
@@ -148,7 +149,7 @@ def matrix_from_euler(angles: np.ndarray, order: str) -> np.ndarray:
         raise BvhError(f"Euler angles must have shape (..., 3), got {angles.shape}")
     R = np.broadcast_to(np.eye(3), angles.shape[:-1] + (3, 3)).copy()
     for n, axis in enumerate(axes):
-        R = R @ _axis_rotations(axis, angles[..., n])
+        R = R @ matrix_from_cos_sin(axis, np.cos(angles[..., n]), np.sin(angles[..., n]))
     return R
 
 
@@ -172,29 +173,6 @@ def euler_from_matrix(R: np.ndarray, order: str) -> np.ndarray:
         c = np.where(lock, 0.0, c)
         a = np.where(lock, np.arctan2(s * R[..., k, j], R[..., j, j]), a)
     return np.stack([a, b, c], axis=-1)
-
-
-def _axis_rotations(axis: int, angles: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) rotations by ``angles`` (...) [rad] about coordinate axis 0, 1 or 2."""
-    angles = np.asarray(angles, dtype=float)
-    c, s = np.cos(angles), np.sin(angles)
-    i, j = (axis + 1) % 3, (axis + 2) % 3
-    R = np.zeros(angles.shape + (3, 3))
-    R[..., axis, axis] = 1.0
-    R[..., i, i] = c
-    R[..., j, j] = c
-    R[..., i, j] = -s
-    R[..., j, i] = s
-    return R
-
-
-def _rotations_about(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """(F, 3, 3) rotations by ``angles`` (F,) [rad] about the unit ``axis`` (3,) (Rodrigues)."""
-    x, y, z = axis
-    K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    s = np.sin(angles)[:, None, None]
-    c = np.cos(angles)[:, None, None]
-    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
 
 
 # ---------------------------------------------------------------------------
@@ -322,7 +300,7 @@ def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z") -> BvhClip:
             if plan.euler:
                 R = np.broadcast_to(sk.frame_rotation[_first_frame(sk, j)], (F, 3, 3))
                 for d in sk.joint_dofs[j]:
-                    R = R @ _rotations_about(sk.frame_axis[sk.dof_frame[d]], motion.q[:, d])
+                    R = R @ matrix_from_axis_angle(sk.frame_axis[sk.dof_frame[d]], motion.q[:, d])
                 angles = np.unwrap(euler_from_matrix(C @ R @ C.T, order), axis=0)
                 columns.extend(np.degrees(angles).T)
             else:

@@ -19,10 +19,31 @@ def skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
-def matrix_from_axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation matrix (3, 3) turning ``angle`` [rad] about the unit ``axis`` (3,)."""
+def matrix_from_axis_angle(axis: np.ndarray, angle) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) turning ``angle`` (scalar or (...)) [rad] about the unit ``axis`` (3,)."""
     k = skew(np.asarray(axis, dtype=float))
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+    angle = np.asarray(angle, dtype=float)
+    s = np.sin(angle)[..., None, None]
+    c = np.cos(angle)[..., None, None]
+    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
+
+
+def matrix_from_cos_sin(axis: int, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) about coordinate axis 0 (x), 1 (y) or 2 (z), from cos and sin (...).
+
+    Taking cos and sin rather than the angle lets a caller pass exact values
+    (a BVH file's 90 degrees gives exactly 0 and 1).
+    """
+    cos = np.asarray(cos, dtype=float)
+    sin = np.asarray(sin, dtype=float)
+    i, j = (axis + 1) % 3, (axis + 2) % 3  # the plane the rotation turns
+    R = np.zeros(cos.shape + (3, 3))
+    R[..., axis, axis] = 1.0
+    R[..., i, i] = cos
+    R[..., j, j] = cos
+    R[..., i, j] = -sin
+    R[..., j, i] = sin
+    return R
 
 
 def matrix_from_rotvec(rotvec: np.ndarray) -> np.ndarray:

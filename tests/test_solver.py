@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 import gsik
 from gsik import Status, Target
+from gsik.benchmark import smooth_trajectory
 
 from solver_helpers import random_q, targets_at
 
@@ -114,14 +115,8 @@ def test_a_reversed_joint_turns_the_other_way_seen_from_the_root(biped):
 
 
 def smooth_motion(biped, frames=120, seed=0):
-    """A smooth 60 fps joint trajectory inside the limits (sums of slow sinusoids)."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(frames) / 60.0
-    amp = 0.15 * (biped.upper - biped.lower) * rng.uniform(0.2, 1.0, biped.n_dofs)
-    mid = np.clip(biped.rest, biped.lower + amp, biped.upper - amp)
-    phase = rng.uniform(0, 2 * np.pi, biped.n_dofs)
-    freq = rng.uniform(0.2, 0.5, biped.n_dofs)
-    return mid + amp * np.sin(2 * np.pi * freq * t[:, None] + phase)
+    """A smooth 60 fps joint trajectory inside the limits (the benchmarks' own)."""
+    return smooth_trajectory(biped, frames, seed)
 
 
 def test_warm_start_tracks_better_than_cold_start_for_the_same_sweeps(biped):
