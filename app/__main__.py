@@ -1,5 +1,5 @@
-"""``python -m app``: run gsik-studio."""
+"""``python -m gsik_studio``: run gsik-studio."""
 
-from app.main import main
+from gsik_studio.main import main
 
 raise SystemExit(main())

@@ -30,15 +30,15 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("QT_QPA_PLATFORM", "xcb" if sys.platform.startswith("linux") else "")
     if not os.environ["QT_QPA_PLATFORM"]:
         del os.environ["QT_QPA_PLATFORM"]
-    from app.qt_compat import protect_none
+    from gsik_studio.qt_compat import protect_none
 
-    protect_none()  # PySide6 6.12 on Python 3.11 drops references to None (see app.qt_compat)
+    protect_none()  # PySide6 6.12 on Python 3.11 drops references to None (see gsik_studio.qt_compat)
     import pyvista as pv
     from PySide6 import QtCore, QtWidgets
 
     import gsik
-    from app.main_window import MainWindow, apply_dark_theme
-    from app.model import Document
+    from gsik_studio.main_window import MainWindow, apply_dark_theme
+    from gsik_studio.model import Document
 
     pv.global_theme.multi_samples = 0
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([sys.argv[0]])

@@ -1,6 +1,6 @@
 """The main window of gsik-studio: toolbar, 3D viewport, side panel, status bar.
 
-The window owns a :class:`app.model.Document` and a :class:`app.viewport.Viewport`.
+The window owns a :class:`gsik_studio.model.Document` and a :class:`gsik_studio.viewport.Viewport`.
 Widgets only show the document and forward input to its commands; when the
 document changes, widgets are updated inside ``QSignalBlocker`` so that
 showing a value never writes it back.
@@ -21,9 +21,9 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from PySide6.QtCore import Qt
 
 import gsik
-from app.model import Document, Playback
-from app.qt_compat import protect_none
-from gsik.pose import TargetPose
+from gsik_studio.model import Document, Playback
+from gsik_studio.qt_compat import protect_none
+from gsik.io.pose import TargetPose
 
 FRAME_INTERVAL_MS = 16  # ~60 Hz
 READOUT_INTERVAL_S = 0.25  # panel and status texts refresh at most this often
@@ -108,12 +108,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def __init__(self, doc: Document | None = None, settings: QtCore.QSettings | None = None,
                  parent: QtWidgets.QWidget | None = None):
-        protect_none()  # PySide6 6.12 on Python 3.11 (see app.qt_compat)
+        protect_none()  # PySide6 6.12 on Python 3.11 (see gsik_studio.qt_compat)
         super().__init__(parent)
         import pyvista as pv
         from pyvistaqt import QtInteractor
 
-        from app.viewport import Viewport
+        from gsik_studio.viewport import Viewport
 
         pv.global_theme.multi_samples = 0  # software GL: multisampling costs 3-5x
         self.settings = settings if settings is not None else QtCore.QSettings("gsik", "gsik-studio")
@@ -222,7 +222,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.act_walk = None
         self.act_scenarios = None
         try:
-            from gsik import gait
+            from gsik.anim import gait
         except ImportError:
             gait = None
         if gait is not None and hasattr(gait, "walk") and hasattr(gait, "WalkParameters"):
@@ -230,7 +230,7 @@ class MainWindow(QtWidgets.QMainWindow):
                                          "Play a walk: the IK root swaps between the feet at every step",
                                          S.SP_MediaSeekForward)
         try:
-            from gsik import scenarios
+            from gsik.anim import scenarios
         except ImportError:
             scenarios = None
         if scenarios is not None and all(hasattr(scenarios, n) for n in ("SCENARIO_NAMES", "builtin_scenario",
@@ -673,7 +673,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -- playback -----------------------------------------------------------------------------
     def play(self, frames, text: str = "Play", frame_time: float = 1 / 30) -> Playback:
-        """Play a :class:`gsik.motion.Motion` or a sequence of target dicts in the view."""
+        """Play a :class:`gsik.anim.motion.Motion` or a sequence of target dicts in the view."""
         self.stop_playback()
         self.playback = self.doc.playback(frames, text, frame_time)
         self.timer.stop()
@@ -683,8 +683,8 @@ class MainWindow(QtWidgets.QMainWindow):
         return self.playback
 
     def play_walk(self, n_steps: int = 4) -> Playback | None:
-        """Solve a walk with :func:`gsik.gait.walk` from the standing pose and play it."""
-        from gsik import gait
+        """Solve a walk with :func:`gsik.anim.gait.walk` from the standing pose and play it."""
+        from gsik.anim import gait
 
         QtWidgets.QApplication.setOverrideCursor(Qt.WaitCursor)
         try:
@@ -698,12 +698,12 @@ class MainWindow(QtWidgets.QMainWindow):
         return self.play(result.motion, "Walk")
 
     def play_scenario(self, name: str) -> Playback | None:
-        """Load a built-in scenario of :mod:`gsik.scenarios`: the rest pose with the scenario's targets.
+        """Load a built-in scenario of :mod:`gsik.anim.scenarios`: the rest pose with the scenario's targets.
 
         The solver then settles it live, as it does after a drag; an animated
         scenario (the wave) plays its target frames first.
         """
-        from gsik import scenarios
+        from gsik.anim import scenarios
 
         try:
             sc = scenarios.builtin_scenario(self.doc.skeleton, name)

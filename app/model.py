@@ -4,7 +4,7 @@ Plain Python: no Qt, no PyVista. The window and the viewport draw a
 :class:`Document` and forward input to it; tests drive it without a display.
 
 Every edit is a command on the :class:`History`. A command keeps the
-complete :class:`gsik.pose.Pose` from before the edit; when it is undone it
+complete :class:`gsik.io.pose.Pose` from before the edit; when it is undone it
 also keeps the pose from just before the undo, so undo and redo restore
 angles, root and targets exactly, bit for bit (the solver keeps settling the
 pose between edits, and redo gives back the settled pose, not a guess).
@@ -21,8 +21,8 @@ import numpy as np
 
 import gsik
 from gsik.errors import PoseError, choices
-from gsik.motion import Motion
-from gsik.pose import Pose, PoseRead, TargetPose, read_pose, write_pose
+from gsik.anim.motion import Motion
+from gsik.io.pose import Pose, PoseRead, TargetPose, read_pose, write_pose
 from gsik.rotations import matrix_from_axis_angle, matrix_from_quaternion, quaternion_from_matrix, transform
 
 #: Axis names of the world, for rotating a target about one of them.
@@ -574,7 +574,7 @@ class Document:
     # -- playback (hook for walks and scenarios) -------------------------------
     def playback(self, frames: Motion | Sequence[Mapping[str, gsik.Target | TargetPose | None]],
                  text: str = "Play", frame_time: float = 1 / 30) -> Playback:
-        """A :class:`Playback` of a :class:`gsik.motion.Motion` or of a sequence of target dicts.
+        """A :class:`Playback` of a :class:`gsik.anim.motion.Motion` or of a sequence of target dicts.
 
         A playback running already is stopped first. Any edit, undo, redo or
         load while it runs stops it (what was played so far stays, as one step).
@@ -588,7 +588,7 @@ class Document:
 class Playback:
     """Plays frames onto a document, then records the result as one undo step.
 
-    A frame is either a frame of a :class:`gsik.motion.Motion` (angles, root
+    A frame is either a frame of a :class:`gsik.anim.motion.Motion` (angles, root
     and root transform applied directly) or a dict of targets (applied, then
     the solver steps). Call :meth:`advance` once per frame (the window does it
     from a timer every :attr:`frame_time` seconds) until it returns False,

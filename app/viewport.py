@@ -1,4 +1,4 @@
-"""The 3D viewport: draws a :class:`app.model.Document` with PyVista/VTK.
+"""The 3D viewport: draws a :class:`gsik_studio.model.Document` with PyVista/VTK.
 
 The scene is built once; every frame only overwrites point coordinates (and,
 when they change, point colours) of a handful of PolyData objects:
@@ -29,7 +29,7 @@ import pyvista as pv
 import vtk
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
-from app.model import Document, Signal
+from gsik_studio.model import Document, Signal
 from gsik.rotations import quaternion_from_matrix
 
 # Colours (RGB 0-1). Red / green / blue are reserved for targets, effectors and axes.

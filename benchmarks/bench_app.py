@@ -2,7 +2,7 @@
 
     xvfb-run -a -s "-screen 0 1600x1100x24" python benchmarks/bench_app.py [--frames 300]
 
-1. The real :class:`app.main_window.MainWindow` (1280x800) for ``--frames``
+1. The real :class:`gsik_studio.main_window.MainWindow` (1280x800) for ``--frames``
    frames while the targets move: both hands circle, the head sways. Each
    frame is what the app does when the artist drags: a target move goes
    through the document's command (one merged undo step), the window's
@@ -34,7 +34,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 def _app():
     os.environ.setdefault("QT_QPA_PLATFORM", "xcb")
-    from app.qt_compat import protect_none
+    from gsik_studio.qt_compat import protect_none
 
     protect_none()
     import pyvista as pv
@@ -77,7 +77,7 @@ class AppRun:
 
         from PySide6 import QtCore
 
-        from app.main_window import MainWindow
+        from gsik_studio.main_window import MainWindow
 
         self.app = _app()
         self._scratch = tempfile.TemporaryDirectory()
@@ -134,7 +134,7 @@ class BareRun:
         from PySide6 import QtWidgets
         from vtkmodules.util.numpy_support import vtk_to_numpy
 
-        from app.viewport import _glyph_actor
+        from gsik_studio.viewport import _glyph_actor
 
         vp = source.w.viewport
         self.app = _app()

@@ -19,14 +19,14 @@ import time
 
 import numpy as np
 
-from gsik.bvh import format_bvh, parse_bvh
-from gsik.bvh_skeleton import import_bvh, motion_to_bvh
+from gsik.io.bvh import format_bvh, parse_bvh
+from gsik.io.bvh_skeleton import import_bvh, motion_to_bvh
 from gsik.kinematics import world_frames
-from gsik.motion import Motion
+from gsik.anim.motion import Motion
 from gsik.rotations import matrix_from_rotvec, transform
 from gsik.skeleton import Skeleton
-from gsik.skeleton_io import load_skeleton
-from gsik.tracking import track_clip
+from gsik.io.skeleton_yaml import load_skeleton
+from gsik.anim.tracking import track_clip
 
 EFFECTORS = ("head", "pelvis", "left_hand", "right_hand", "left_foot", "right_foot")
 #: (sweeps per step, most steps per frame) to compare; the first is track_clip's default.

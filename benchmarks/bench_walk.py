@@ -17,8 +17,8 @@ import time
 
 import numpy as np
 
-from gsik.gait import WalkParameters, measure_walk, walk
-from gsik.skeleton_io import load_skeleton
+from gsik.anim.gait import WalkParameters, measure_walk, walk
+from gsik.io.skeleton_yaml import load_skeleton
 from gsik.solver import SolverSettings
 
 #: (label, settings, solver steps per frame); the second is walk()'s default.

@@ -18,7 +18,7 @@ from gsik.errors import (
     UrdfError,
 )
 from gsik.skeleton import JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
-from gsik.skeleton_io import bundled_skeletons, load_skeleton, skeleton_from_dict, skeleton_from_yaml
+from gsik.io.skeleton_yaml import bundled_skeletons, load_skeleton, skeleton_from_dict, skeleton_from_yaml
 from gsik.solver import SolveResult, Solver, SolverSettings, Status
 from gsik.targets import Target
 

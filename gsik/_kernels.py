@@ -28,7 +28,7 @@ O_SWEEPS, O_RESIDUAL, O_UPDATE, O_COST, O_STEP_NORM, O_ACCEPTED, O_LAMBDA, O_STA
 N_STATS = 9
 # With adaptive damping, lam may fall to this fraction of delta while steps succeed: near a
 # solution the steps come closer to Gauss-Newton and the last millimetre takes tens of frames, not hundreds
-# (measured on gsik.scenarios; 0.01 settles faster still but tracks a fast wave worse).
+# (measured on gsik.anim.scenarios; 0.01 settles faster still but tracks a fast wave worse).
 ADAPTIVE_FLOOR = 0.1
 # Status codes, in the order of gsik.solver.Status.
 CONVERGED, STALLED, BUDGET_EXHAUSTED = 0, 1, 2

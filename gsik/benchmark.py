@@ -16,7 +16,7 @@ import numpy as np
 from gsik import _kernels
 from gsik._jit import njit
 from gsik.skeleton import Skeleton
-from gsik.skeleton_io import load_skeleton
+from gsik.io.skeleton_yaml import load_skeleton
 from gsik.solver import PAPER_METHOD, Solver
 from gsik.targets import Target
 

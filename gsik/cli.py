@@ -110,11 +110,11 @@ def load_any_skeleton(spec: str):
     """A bundled skeleton by name, a skeleton YAML file, a URDF robot (``.urdf``) or a BVH clip's skeleton."""
     suffix = Path(spec).suffix.lower()
     if suffix == ".urdf":
-        skeleton_from_urdf = _require("gsik.urdf_skeleton", "skeleton_from_urdf", feature="URDF import")
+        skeleton_from_urdf = _require("gsik.io.urdf_skeleton", "skeleton_from_urdf", feature="URDF import")
         return skeleton_from_urdf(spec)
     if suffix == ".bvh":
-        read_bvh = _require("gsik.bvh", "read_bvh", feature="BVH reading")
-        import_bvh = _require("gsik.bvh_skeleton", "import_bvh", feature="BVH import")
+        read_bvh = _require("gsik.io.bvh", "read_bvh", feature="BVH reading")
+        import_bvh = _require("gsik.io.bvh_skeleton", "import_bvh", feature="BVH import")
         return import_bvh(read_bvh(spec)).skeleton
     return gsik.load_skeleton(spec)
 
@@ -242,7 +242,7 @@ def _pose_skeleton_name(path: str) -> str | None:
     """The ``skeleton:`` field of a pose file, read loosely (the pose reader checks everything later)."""
     import yaml
 
-    from gsik.fileio import read_text
+    from gsik.io.files import read_text
 
     try:
         data = yaml.safe_load(read_text(path, "pose file"))
@@ -253,7 +253,7 @@ def _pose_skeleton_name(path: str) -> str | None:
 
 
 def cmd_solve(args: argparse.Namespace, out: TextIO) -> int:
-    read_pose, write_pose = _require("gsik.pose", "read_pose", "write_pose", feature="the pose file format")
+    read_pose, write_pose = _require("gsik.io.pose", "read_pose", "write_pose", feature="the pose file format")
     if args.out:
         _check_out(args.out, (".yaml", ".yml"), "pose")
     spec = args.skeleton or _pose_skeleton_name(args.pose)
@@ -292,11 +292,11 @@ def cmd_solve(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def cmd_walk(args: argparse.Namespace, out: TextIO) -> int:
-    from gsik.gait import REACH_WARNING, WALK_STEPS_PER_FRAME, WalkParameters, format_measures, measure_walk, walk
+    from gsik.anim.gait import REACH_WARNING, WALK_STEPS_PER_FRAME, WalkParameters, format_measures, measure_walk, walk
 
     if args.out:
         _check_out(args.out, (".bvh",), "BVH")
-        write_motion_bvh = _require("gsik.bvh_skeleton", "write_motion_bvh", feature="BVH export")
+        write_motion_bvh = _require("gsik.io.bvh_skeleton", "write_motion_bvh", feature="BVH export")
     cadence = args.cadence
     if args.step_duration is not None:
         if not (math.isfinite(args.step_duration) and args.step_duration > 0):
@@ -328,7 +328,7 @@ def cmd_walk(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def cmd_scenarios(args: argparse.Namespace, out: TextIO) -> int:
-    from gsik.scenarios import (SCENARIO_NAMES, builtin_scenario, format_table, random_scenarios, run_scenario,
+    from gsik.anim.scenarios import (SCENARIO_NAMES, builtin_scenario, format_table, random_scenarios, run_scenario,
                                 scenario_pose)
 
     if args.random < 0:
@@ -341,8 +341,8 @@ def cmd_scenarios(args: argparse.Namespace, out: TextIO) -> int:
         raise CommandError("no scenarios to run (give --only NAME or --random N)")
     writers = None
     if args.out:
-        write_pose = _require("gsik.pose", "write_pose", feature="the pose file format")
-        write_motion_bvh = _require("gsik.bvh_skeleton", "write_motion_bvh", feature="BVH export")
+        write_pose = _require("gsik.io.pose", "write_pose", feature="the pose file format")
+        write_motion_bvh = _require("gsik.io.bvh_skeleton", "write_motion_bvh", feature="BVH export")
         folder = _make_dir(args.out)
         writers = (write_pose, write_motion_bvh)
     reports = []
@@ -379,10 +379,10 @@ def _names(values: Sequence[str] | None) -> list[str] | None:
 
 
 def cmd_track(args: argparse.Namespace, out: TextIO) -> int:
-    read_bvh = _require("gsik.bvh", "read_bvh", feature="BVH reading")
-    import_bvh, write_motion_bvh = _require("gsik.bvh_skeleton", "import_bvh", "write_motion_bvh",
+    read_bvh = _require("gsik.io.bvh", "read_bvh", feature="BVH reading")
+    import_bvh, write_motion_bvh = _require("gsik.io.bvh_skeleton", "import_bvh", "write_motion_bvh",
                                             feature="BVH import and export")
-    track_clip = _require("gsik.tracking", "track_clip", feature="clip tracking")
+    track_clip = _require("gsik.anim.tracking", "track_clip", feature="clip tracking")
     if args.out:
         _check_out(args.out, (".bvh",), "BVH")
     effectors = _names(args.effectors)

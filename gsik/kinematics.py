@@ -8,11 +8,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gsik import _kernels
-from gsik.skeleton import Skeleton
+
+if TYPE_CHECKING:  # annotations only: the skeleton imports this module for its FK shortcuts
+    from gsik.skeleton import Skeleton
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,4 +1,4 @@
-"""Tests for gsik.bvh: parsing, validation, writing and the clip's own FK."""
+"""Tests for gsik.io.bvh: parsing, validation, writing and the clip's own FK."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gsik.bvh import (
+from gsik.io.bvh import (
     CHANNEL_NAMES,
     BvhClip,
     BvhJoint,

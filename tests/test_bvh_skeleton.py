@@ -1,4 +1,4 @@
-"""Tests for gsik.bvh_skeleton: BVH export of poses and motions, import of clips as skeletons."""
+"""Tests for gsik.io.bvh_skeleton: BVH export of poses and motions, import of clips as skeletons."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import gsik
-from gsik.bvh import BvhClip, BvhJoint, bvh_forward_kinematics, format_bvh, parse_bvh, read_bvh
-from gsik.bvh_skeleton import (
+from gsik.io.bvh import BvhClip, BvhJoint, bvh_forward_kinematics, format_bvh, parse_bvh, read_bvh
+from gsik.io.bvh_skeleton import (
     EULER_ORDER,
     Z_UP_TO_Y_UP,
     BvhImportWarning,
@@ -27,9 +27,9 @@ from gsik.bvh_skeleton import (
     write_motion_bvh,
 )
 from gsik.errors import BvhError
-from gsik.motion import Motion
+from gsik.anim.motion import Motion
 from gsik.rotations import matrix_from_rotvec
-from gsik.urdf_skeleton import skeleton_from_urdf
+from gsik.io.urdf_skeleton import skeleton_from_urdf
 
 DATA = Path(__file__).parent / "data"
 FIXTURES = sorted(p.name for p in DATA.glob("*.bvh"))
@@ -126,7 +126,7 @@ def test_euler_from_matrix_reproduces_the_matrix_at_gimbal_lock(order, rng):
 def test_matrix_from_euler_means_what_bvh_channels_mean(order, rng):
     degrees = rng.uniform(-170, 170, (5, 9))
     clip = one_joint_clip(order, degrees)
-    local = gsik.bvh.bvh_local_rotations(clip)
+    local = gsik.io.bvh.bvh_local_rotations(clip)
     np.testing.assert_allclose(matrix_from_euler(np.radians(degrees[:, 0:3]), order), local[:, 0], atol=1e-12)
 
 
@@ -469,7 +469,7 @@ def test_import_makes_a_site_for_each_joint_chosen_as_effector():
 
 
 def test_import_rejects_what_is_not_a_clip():
-    with pytest.raises(BvhError, match="needs a gsik.bvh.BvhClip"):
+    with pytest.raises(BvhError, match="needs a gsik.io.bvh.BvhClip"):
         import_bvh("walk.bvh")
     with pytest.raises(BvhError, match="unknown up axis 'x'"):
         import_bvh(read_bvh(DATA / "walk_zxy.bvh"), up="x")

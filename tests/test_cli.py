@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 import gsik
-from gsik.bvh import read_bvh
+from gsik.io.bvh import read_bvh
 from gsik.cli import Progress, build_parser, main
-from gsik.pose import read_pose, write_pose
-from gsik.scenarios import builtin_scenario, scenario_pose
+from gsik.io.pose import read_pose, write_pose
+from gsik.anim.scenarios import builtin_scenario, scenario_pose
 
 DATA = Path(__file__).parent / "data"
 REPO = Path(gsik.__file__).resolve().parent.parent
@@ -320,7 +320,7 @@ def test_bench_quick_prints_the_tables():
 
 
 def test_a_missing_feature_fails_with_a_clear_message(monkeypatch, walk_bvh, capsys):
-    monkeypatch.setitem(sys.modules, "gsik.tracking", None)  # as if the module were not installed
+    monkeypatch.setitem(sys.modules, "gsik.anim.tracking", None)  # as if the module were not installed
     assert run("track", str(walk_bvh))[0] == 1
     err = capsys.readouterr().err
     assert err.startswith("gsik: error: clip tracking is not available in this installation")

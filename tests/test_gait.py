@@ -10,7 +10,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import gsik
-from gsik.gait import (
+from gsik.anim.gait import (
     FEET,
     GAIT_SITES,
     HEEL_RISE_TIME,
@@ -25,7 +25,7 @@ from gsik.gait import (
     walk,
     walk_frames,
 )
-from gsik.motion import Motion
+from gsik.anim.motion import Motion
 from gsik.skeleton import JointSpec, RotationSpec, SiteSpec, build_skeleton
 
 N_STEPS = 4

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gsik
-from gsik.pose import Pose, PoseRead, TargetPose, pose_from_yaml, pose_to_yaml, read_pose, write_pose
+from gsik.io.pose import Pose, PoseRead, TargetPose, pose_from_yaml, pose_to_yaml, read_pose, write_pose
 from gsik.rotations import quaternion_from_matrix
 
 

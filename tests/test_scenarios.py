@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import gsik
-from gsik.pose import pose_from_yaml, pose_to_yaml
+from gsik.io.pose import pose_from_yaml, pose_to_yaml
 from gsik.rotations import angle_between
-from gsik.scenarios import (
+from gsik.anim.scenarios import (
     SCENARIO_NAMES,
     Scenario,
     ScenarioError,

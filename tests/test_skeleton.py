@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gsik
-from gsik.skeleton_io import _bundled_dir
+from gsik.io.skeleton_yaml import _bundled_dir
 
 from solver_helpers import random_q
 

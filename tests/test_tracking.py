@@ -1,4 +1,4 @@
-"""Tests for gsik.tracking: following a clip's own effector poses, warm-started."""
+"""Tests for gsik.anim.tracking: following a clip's own effector poses, warm-started."""
 
 from __future__ import annotations
 
@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 import gsik
-from gsik.bvh import format_bvh, parse_bvh
-from gsik.bvh_skeleton import import_bvh, motion_to_bvh
+from gsik.io.bvh import format_bvh, parse_bvh
+from gsik.io.bvh_skeleton import import_bvh, motion_to_bvh
 from gsik.errors import SolverError
-from gsik.motion import Motion
+from gsik.anim.motion import Motion
 from gsik.rotations import matrix_from_rotvec
-from gsik.tracking import TrackResult, track_clip
+from gsik.anim.tracking import TrackResult, track_clip
 
 SIX = ("head", "pelvis", "left_hand", "right_hand", "left_foot", "right_foot")
 

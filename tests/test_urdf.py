@@ -1,4 +1,4 @@
-"""Tests for gsik.urdf: parsing, validation and the RPY convention."""
+"""Tests for gsik.io.urdf: parsing, validation and the RPY convention."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gsik.errors import GsikError, GsikFileError, UrdfError
-from gsik.urdf import UrdfJoint, UrdfRobot, matrix_from_rpy, parse_urdf, read_urdf
+from gsik.io.urdf import UrdfJoint, UrdfRobot, matrix_from_rpy, parse_urdf, read_urdf
 
 DATA = Path(__file__).parent / "data"
 

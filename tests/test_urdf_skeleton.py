@@ -1,4 +1,4 @@
-"""Tests for gsik.urdf_skeleton: URDF robots as gsik skeletons."""
+"""Tests for gsik.io.urdf_skeleton: URDF robots as gsik skeletons."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import pytest
 import gsik
 from gsik.errors import UrdfError
 from gsik.rotations import matrix_from_axis_angle
-from gsik.urdf import matrix_from_rpy, parse_urdf, read_urdf
-from gsik.urdf_skeleton import link_site_names, skeleton_from_urdf
+from gsik.io.urdf import matrix_from_rpy, parse_urdf, read_urdf
+from gsik.io.urdf_skeleton import link_site_names, skeleton_from_urdf
 
 DATA = Path(__file__).parent / "data"
 ROBOTS = ["humanoid.urdf", "two_link_arm.urdf"]

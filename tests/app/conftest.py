@@ -124,7 +124,7 @@ def x_display():
 @pytest.fixture(scope="session")
 def qapp_args(x_display):
     """pytest-qt makes its QApplication from these: depending on x_display starts Xvfb first."""
-    from app.qt_compat import protect_none
+    from gsik_studio.qt_compat import protect_none
 
     protect_none()  # PySide6 6.12 on Python 3.11 drops a reference to None per void call
     return ["gsik-studio-tests"]

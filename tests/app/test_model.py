@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import gsik
-from app.model import Document, History, Command, mirror_map
-from gsik.pose import pose_to_yaml
+from gsik_studio.model import Document, History, Command, mirror_map
+from gsik.io.pose import pose_to_yaml
 
 
 def settle(doc: Document, max_frames: int = 500) -> gsik.SolveResult:
@@ -30,7 +30,7 @@ def doc():
 
 
 def test_model_imports_neither_qt_nor_pyvista():
-    code = "import sys, app.model, gsik.pose; bad = [m for m in sys.modules if m.split('.')[0] in " \
+    code = "import sys, gsik_studio.model, gsik.io.pose; bad = [m for m in sys.modules if m.split('.')[0] in " \
            "('PySide6', 'pyvista', 'pyvistaqt', 'vtk', 'vtkmodules', 'PyQt5', 'PyQt6')]; print(bad); " \
            "sys.exit(1 if bad else 0)"
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -281,7 +281,7 @@ def test_unknown_effector_is_an_error_naming_the_valid_ones(doc):
 
 def test_history_merges_one_drag_and_keeps_the_clean_mark():
     h = History()
-    from gsik.pose import Pose
+    from gsik.io.pose import Pose
     p = Pose("s", "r", (0, 0, 0), (1, 0, 0, 0), {}, {})
     assert h.push(Command("a", p, merge_key=("move", 1)))
     assert not h.push(Command("a", p, merge_key=("move", 1)))
@@ -293,7 +293,7 @@ def test_history_merges_one_drag_and_keeps_the_clean_mark():
 
 
 def test_playback_of_a_motion_is_one_undo_step(doc):
-    from gsik.motion import Motion
+    from gsik.anim.motion import Motion
 
     sk = doc.skeleton
     n = 5

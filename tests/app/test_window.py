@@ -18,7 +18,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 @pytest.fixture()
 def window(qtbot, studio_settings):
-    from app.main_window import MainWindow
+    from gsik_studio.main_window import MainWindow
 
     w = MainWindow(settings=studio_settings)
     w.resize(1280, 860)
@@ -296,7 +296,7 @@ def test_screenshot_shows_red_targets_green_effectors_and_axis_colours(qtbot, wi
 def test_joints_on_a_limit_are_highlighted(qtbot, window):
     from vtkmodules.util.numpy_support import vtk_to_numpy
 
-    from app.viewport import LIMIT_COLOR, _rgb8
+    from gsik_studio.viewport import LIMIT_COLOR, _rgb8
 
     sk = window.doc.skeleton
     q = sk.rest.copy()
@@ -333,7 +333,7 @@ def test_screenshot_command_line_reports_a_bad_pose(qapp, x_display, tmp_path):
 
 def test_many_qt_calls_do_not_exhaust_none(qapp, x_display):
     """PySide6 6.12 on Python 3.11 drops a reference to None per void call; the app guards against it."""
-    code = ("import sys; from app.qt_compat import protect_none; assert protect_none(); "
+    code = ("import sys; from gsik_studio.qt_compat import protect_none; assert protect_none(); "
             "from PySide6 import QtWidgets; app = QtWidgets.QApplication([]); w = QtWidgets.QLabel(); "
             "[w.setText('x') or app.processEvents() for _ in range(30000)]; print('alive')")
     env = dict(os.environ, DISPLAY=x_display, QT_QPA_PLATFORM="xcb")
@@ -342,9 +342,9 @@ def test_many_qt_calls_do_not_exhaust_none(qapp, x_display):
 
 
 def test_walk_button_plays_a_walk_as_one_undo_step(qtbot, window):
-    pytest.importorskip("gsik.gait")
+    pytest.importorskip("gsik.anim.gait")
     if window.act_walk is None:
-        pytest.skip("gsik.gait has no walk()")
+        pytest.skip("gsik.anim.gait has no walk()")
     before = window.doc.pose()
     pelvis = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("pelvis")]
     roots = set()
@@ -362,9 +362,9 @@ def test_walk_button_plays_a_walk_as_one_undo_step(qtbot, window):
 
 
 def test_scenario_menu_loads_targets_and_the_solver_settles_them(qtbot, window):
-    scenarios = pytest.importorskip("gsik.scenarios")
+    scenarios = pytest.importorskip("gsik.anim.scenarios")
     if window.act_scenarios is None:
-        pytest.skip("gsik.scenarios lacks the functions the app uses")
+        pytest.skip("gsik.anim.scenarios lacks the functions the app uses")
     names = [a.text() for a in window.scenario_menu.actions()]
     assert "kneel" in names and "wave" in names
     sc = scenarios.builtin_scenario(window.doc.skeleton, "kneel")
@@ -380,9 +380,9 @@ def test_scenario_menu_loads_targets_and_the_solver_settles_them(qtbot, window):
 
 
 def test_animated_scenario_plays_its_frames(qtbot, window):
-    pytest.importorskip("gsik.scenarios")
+    pytest.importorskip("gsik.anim.scenarios")
     if window.act_scenarios is None:
-        pytest.skip("gsik.scenarios lacks the functions the app uses")
+        pytest.skip("gsik.anim.scenarios lacks the functions the app uses")
     names = [a.text() for a in window.scenario_menu.actions()]
     window.scenario_menu.actions()[names.index("wave")].trigger()
     assert window.playback is not None and window.playback.n_frames > 1
@@ -398,7 +398,7 @@ def test_dragging_a_face_of_the_rotate_box_turns_the_selected_target(qtbot, wind
     doc = window.doc
     window.viewport.select("pelvis")
     t0 = doc.targets["pelvis"]
-    from app.viewport import BOX_SIZE
+    from gsik_studio.viewport import BOX_SIZE
 
     # A point on the box's front face (+y, towards the camera), off the sphere in the middle.
     corner = np.array(t0.position) + t0.rotation @ [0.3 * BOX_SIZE, 0.5 * BOX_SIZE, -0.3 * BOX_SIZE]
@@ -426,7 +426,7 @@ def test_view_presets_and_frame_all(qtbot, window):
 
 
 def test_window_geometry_and_solver_settings_are_remembered(qtbot, studio_settings):
-    from app.main_window import MainWindow
+    from gsik_studio.main_window import MainWindow
 
     w = MainWindow(settings=studio_settings)
     w.resize(1111, 777)

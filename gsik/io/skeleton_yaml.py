@@ -17,14 +17,8 @@ FORMAT_VERSION = 1
 
 
 def _bundled_dir() -> Path:
-    """The folder of the bundled skeletons: installed as ``gsik.skeletons``, or the repository's ``skeletons/``."""
-    try:
-        d = Path(str(resources.files("gsik.skeletons")))
-        if d.is_dir():
-            return d
-    except ModuleNotFoundError:
-        pass
-    return Path(__file__).resolve().parent.parent / "skeletons"
+    """The folder of the bundled skeletons: the ``gsik.skeletons`` package (the repository's ``skeletons/``)."""
+    return Path(str(resources.files("gsik.skeletons")))
 
 
 def bundled_skeletons() -> tuple[str, ...]:

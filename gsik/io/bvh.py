@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from gsik.errors import BvhError, choices
-from gsik.fileio import atomic_write_text, file_error
+from gsik.io.files import atomic_write_text, file_error
 from gsik.rotations import matrix_from_cos_sin
 
 #: The six BVH channel names, in canonical spelling.
@@ -692,7 +692,7 @@ def format_bvh(clip: BvhClip, precision: int = 6) -> str:
 
 
 def write_bvh(path: str | os.PathLike, clip: BvhClip, precision: int = 6) -> None:
-    """Write ``clip`` to ``path`` atomically (see :func:`gsik.fileio.atomic_write_text`).
+    """Write ``clip`` to ``path`` atomically (see :func:`gsik.io.files.atomic_write_text`).
 
     The text is formatted before the file system is touched, so a clip that
     cannot be formatted never affects an existing file.

@@ -1,8 +1,8 @@
 """BVH <-> gsik: export poses and motions as BVH clips, import a clip as a skeleton and its motion.
 
-:mod:`gsik.bvh` reads and writes the file format; this module converts
-between a :class:`~gsik.bvh.BvhClip` and a gsik :class:`~gsik.skeleton.Skeleton`
-with its :class:`~gsik.motion.Motion`.
+:mod:`gsik.io.bvh` reads and writes the file format; this module converts
+between a :class:`~gsik.io.bvh.BvhClip` and a gsik :class:`~gsik.skeleton.Skeleton`
+with its :class:`~gsik.anim.motion.Motion`.
 
 Conventions of the export (:func:`motion_to_bvh`, :func:`pose_to_bvh`,
 :func:`write_motion_bvh`):
@@ -95,11 +95,11 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 
-from gsik.bvh import BvhClip, BvhJoint, bvh_local_rotations, bvh_local_translations, format_bvh
+from gsik.io.bvh import BvhClip, BvhJoint, bvh_local_rotations, bvh_local_translations, format_bvh
 from gsik.errors import BvhError, choices
-from gsik.fileio import atomic_write_text
+from gsik.io.files import atomic_write_text
 from gsik.kinematics import world_frames
-from gsik.motion import Motion
+from gsik.anim.motion import Motion
 from gsik.rotations import matrix_from_axis_angle, matrix_from_cos_sin
 from gsik.skeleton import JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
 
@@ -232,7 +232,7 @@ def _joint_channels(sk: Skeleton, j: int, C: np.ndarray, order: str) -> _Channel
 
 
 def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z") -> BvhClip:
-    """A :class:`~gsik.motion.Motion` as a BVH clip (see the module's conventions).
+    """A :class:`~gsik.anim.motion.Motion` as a BVH clip (see the module's conventions).
 
     Args:
         motion: The motion; each frame may pin a different IK root.
@@ -247,7 +247,7 @@ def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z") -> BvhClip:
             are the same once made valid BVH names.
     """
     if not isinstance(motion, Motion):
-        raise BvhError(f"motion_to_bvh needs a gsik.motion.Motion, got {type(motion).__name__}")
+        raise BvhError(f"motion_to_bvh needs a gsik.anim.motion.Motion, got {type(motion).__name__}")
     scale = _check_units(units)
     C = _check_up(up)
     order = EULER_ORDER[up]
@@ -461,7 +461,7 @@ def import_bvh(
     """A BVH clip as a gsik skeleton and motion (see the module's conventions).
 
     Args:
-        clip: The parsed clip (:func:`gsik.bvh.read_bvh`).
+        clip: The parsed clip (:func:`gsik.io.bvh.read_bvh`).
         effectors: Site or joint names to use as effectors (after namespace
             stripping); ``None`` for every site plus the pelvis.
         root: The skeleton's IK root (a joint or site); default the top joint.
@@ -477,7 +477,7 @@ def import_bvh(
             valid names), or names that clash once their namespace is stripped.
     """
     if not isinstance(clip, BvhClip):
-        raise BvhError(f"import_bvh needs a gsik.bvh.BvhClip, got {type(clip).__name__}")
+        raise BvhError(f"import_bvh needs a gsik.io.bvh.BvhClip, got {type(clip).__name__}")
     if limits not in LIMIT_MODES:
         raise BvhError(f"unknown limits {limits!r}; expected one of {choices(LIMIT_MODES)}")
     if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):

@@ -57,7 +57,7 @@ import numpy as np
 import yaml
 
 from gsik.errors import PoseError, choices
-from gsik.fileio import atomic_write_text, read_text
+from gsik.io.files import atomic_write_text, read_text
 from gsik.rotations import matrix_from_quaternion, quaternion_from_matrix, transform
 from gsik.skeleton import Skeleton
 

@@ -1,6 +1,6 @@
 """URDF -> gsik: a robot description as a skeleton.
 
-:mod:`gsik.urdf` parses the file; this module builds the
+:mod:`gsik.io.urdf` parses the file; this module builds the
 :class:`~gsik.skeleton.Skeleton`.
 
 Naming and mapping:
@@ -36,7 +36,7 @@ import numpy as np
 
 from gsik.errors import UrdfError, choices
 from gsik.skeleton import JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
-from gsik.urdf import UrdfRobot, read_urdf
+from gsik.io.urdf import UrdfRobot, read_urdf
 
 #: Label of a URDF joint's one rotation: DOF names are ``"<joint>.q"``.
 DOF_LABEL = "q"
@@ -67,7 +67,7 @@ def skeleton_from_urdf(
     """A URDF robot as a gsik skeleton (see the module's naming rules).
 
     Args:
-        robot_or_path: A parsed :class:`~gsik.urdf.UrdfRobot` or a path to a URDF file.
+        robot_or_path: A parsed :class:`~gsik.io.urdf.UrdfRobot` or a path to a URDF file.
         effectors: Link names to use as effectors (their sites; site names
             work too); default the leaf links.
         root: The IK root: a link, site or joint name; default the root link.

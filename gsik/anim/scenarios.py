@@ -14,7 +14,7 @@ appeared.
 
 Example:
     >>> import gsik
-    >>> from gsik.scenarios import builtin_scenario, run_scenario
+    >>> from gsik.anim.scenarios import builtin_scenario, run_scenario
     >>> sk = gsik.load_skeleton("biped")
     >>> report = run_scenario(builtin_scenario(sk, "kneel"))
     >>> report.settled, report.max_position_error < 1e-3
@@ -34,8 +34,8 @@ import numpy as np
 
 from gsik.errors import ScenarioError, choices
 from gsik.kinematics import world_frames
-from gsik.motion import Motion
-from gsik.pose import Pose, TargetPose
+from gsik.anim.motion import Motion
+from gsik.io.pose import Pose, TargetPose
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix, transform
 from gsik.skeleton import Skeleton
 from gsik.solver import (Solver, SolverSettings, Status, errors_by_effector, max_orientation_error,
@@ -506,7 +506,7 @@ def format_table(reports: Sequence[ScenarioReport]) -> str:
 
 
 def scenario_pose(scenario: Scenario, q: np.ndarray | None = None) -> Pose:
-    """A :class:`gsik.pose.Pose` of a scenario: its last targets, with the angles ``q`` (default the rest pose).
+    """A :class:`gsik.io.pose.Pose` of a scenario: its last targets, with the angles ``q`` (default the rest pose).
 
     Every effector of the scenario's root is in the pose; one the scenario
     does not drive is written disabled, at where ``q`` puts it.

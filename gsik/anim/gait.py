@@ -28,7 +28,7 @@ skeleton's definition places it.
 
 Example:
     >>> import gsik
-    >>> from gsik.gait import WalkParameters, measure_walk, walk
+    >>> from gsik.anim.gait import WalkParameters, measure_walk, walk
     >>> result = walk(gsik.load_skeleton("biped"), WalkParameters(n_steps=4))
     >>> measure_walk(result).swap_jump_ratio < 3
     True
@@ -45,7 +45,7 @@ import numpy as np
 
 from gsik.errors import GaitError, choices
 from gsik.kinematics import world_frames
-from gsik.motion import Motion
+from gsik.anim.motion import Motion
 from gsik.rotations import angle_between, matrix_from_axis_angle
 from gsik.skeleton import Skeleton
 from gsik.solver import SolveResult, Solver, SolverSettings, Status
@@ -547,7 +547,7 @@ class WalkResult:
 
     Attributes:
         plan: The target trajectories (:class:`GaitPlan`).
-        motion: The walk as a :class:`gsik.motion.Motion`.
+        motion: The walk as a :class:`gsik.anim.motion.Motion`.
         position_errors: (n_frames, 6) distance to each target of :data:`GAIT_SITES` [m]
             after the frame's solve (0 for the root foot, which is pinned).
         orientation_errors: (n_frames, 6) the same for orientations [rad].

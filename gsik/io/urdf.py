@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from gsik.errors import UrdfError, choices
-from gsik.fileio import file_error
+from gsik.io.files import file_error
 
 #: Joint types this module parses (prismatic is parsed; conversion may reject it).
 JOINT_TYPES = ("revolute", "continuous", "fixed", "prismatic")

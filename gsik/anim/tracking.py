@@ -18,7 +18,7 @@ import numpy as np
 
 from gsik.errors import SkeletonError, SolverError, choices
 from gsik.kinematics import world_frames
-from gsik.motion import Motion
+from gsik.anim.motion import Motion
 from gsik.rotations import transform
 from gsik.skeleton import Skeleton
 from gsik.solver import Solver, Status
@@ -150,7 +150,7 @@ def track_clip(
     if not isinstance(skeleton, Skeleton):
         raise SolverError(f"track_clip needs a Skeleton, got {type(skeleton).__name__}")
     if not isinstance(motion, Motion):
-        raise SolverError(f"track_clip needs a gsik.motion.Motion, got {type(motion).__name__}")
+        raise SolverError(f"track_clip needs a gsik.anim.motion.Motion, got {type(motion).__name__}")
     if isinstance(steps_per_frame, bool) or not isinstance(steps_per_frame, (int, np.integer)) or steps_per_frame < 1:
         raise SolverError(f"steps_per_frame must be a whole number >= 1, got {steps_per_frame!r}")
     if motion.n_frames == 0:

@@ -1,0 +1,1 @@
+"""Motion built on the solver: walking (gait), scenarios, clip tracking and the Motion container."""
