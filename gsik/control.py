@@ -1,0 +1,295 @@
+"""Artist control: prioritised steps over targets on any frame, balance and a preferred posture.
+
+:class:`Controller` is what :class:`gsik.Solver` uses when its targets are
+not all on one priority level, aim frames that are not effector sites, or a
+posture or balance is on. One step linearises every task at the current
+angles and solves the levels in strict order (:func:`gsik.priority.prioritized_step`):
+
+1. the targets of priority 0,
+2. balance (when on): the centre of mass over the support polygon,
+3. the targets of priority 1, 2, ... in turn,
+4. the preferred posture (when on).
+
+A step is kept only if it leaves every level no worse, in order: the first
+level it changes by more than ``settle_tolerance`` must improve (a level
+within its tolerances before and after counts as unchanged). Otherwise it is
+halved, then refused and the damping raised (Levenberg-Marquardt, as the fast
+path does), so a held target settles at its best reach instead of jittering.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from gsik import _kernels
+from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
+    support_polygon
+from gsik.kinematics import topology
+from gsik.priority import Level, posture_level, prioritized_step
+
+#: Balance sits between the targets of priority 0 and those of priority 1 (arms pulled at 1 cannot tip the body).
+BALANCE_PRIORITY = 0.5
+#: The centre of mass is held this far [m] inside the support polygon's edge ...
+BALANCE_MARGIN = 0.01
+#: ... and pulled back once it comes within this band [m] of that line, so it never chatters across it.
+BALANCE_BAND = 0.005
+
+
+class FrameTask(NamedTuple):
+    """A target on one frame, packed.
+
+    Attributes:
+        name: The joint or site name.
+        frame: Its frame index.
+        position: (3,) world target position [m].
+        rotation: (3, 3) world target orientation.
+        row_weight: (6,) weights of the 3 position and 3 orientation rows (0: unused).
+        priority: Level; 0 is the most important.
+    """
+
+    name: str
+    frame: int
+    position: np.ndarray
+    rotation: np.ndarray
+    row_weight: np.ndarray
+    priority: int
+
+
+class Balance(NamedTuple):
+    """What balance needs: the mass model and the feet that may carry the body.
+
+    Attributes:
+        mass: The :class:`~gsik.balance.MassModel`.
+        feet: (k,) frame index of each foot that may support the body.
+        soles: k sole polygons (c, 2) [m] in each foot frame's x-y plane.
+    """
+
+    mass: MassModel
+    feet: tuple[int, ...]
+    soles: tuple[np.ndarray, ...]
+
+
+class Posture(NamedTuple):
+    """The preferred pose ``reference`` (n_dofs,) [rad] and its precision: weights (n_dofs,) or (n_dofs, n_dofs)."""
+
+    reference: np.ndarray
+    precision: np.ndarray
+
+
+class ControlStats(NamedTuple):
+    """What a controller step did.
+
+    Attributes:
+        accepted: The step was kept.
+        held: No level would change by more than the settle tolerance: the pose is at rest.
+        converged: Every target is within the position and orientation tolerances.
+        cost: Weighted squared error ``0.5 e^T W e`` of the targets, all levels.
+        step_norm: Size of the change of ``q`` [rad].
+    """
+
+    accepted: bool
+    held: bool
+    converged: bool
+    cost: float
+    step_norm: float
+
+
+class Controller:
+    """Prioritised IK steps for one skeleton seen from one root.
+
+    Args:
+        skeleton: The :class:`gsik.Skeleton` (its ``root`` the IK root).
+        tasks: The targets, each a :class:`FrameTask`.
+        posture: A :class:`Posture`, or ``None``.
+        balance: A :class:`Balance`, or ``None``.
+        settings: The :class:`gsik.SolverSettings`.
+    """
+
+    def __init__(self, skeleton, tasks, posture: Posture | None, balance: Balance | None, settings):
+        self._sk = skeleton
+        self._settings = settings
+        self._posture = posture
+        self._balance = balance
+        self._root = skeleton.frame_of(skeleton.root)
+        order = sorted(range(len(tasks)), key=lambda k: tasks[k].priority)
+        self._tasks = [tasks[k] for k in order]
+        names = [t.name for t in self._tasks]
+        self.names = tuple(names)
+        self._topo = topology(skeleton, skeleton.root, names)
+        self._tp = np.array([t.position for t in self._tasks]).reshape(-1, 3)
+        self._tR = np.array([t.rotation for t in self._tasks]).reshape(-1, 3, 3)
+        self._row_w = np.array([t.row_weight for t in self._tasks]).reshape(-1, 6)
+        priorities = [t.priority for t in self._tasks]
+        if balance is not None:
+            priorities.append(BALANCE_PRIORITY)
+        # Level index of every task row block, and of balance.
+        self._levels = sorted(set(priorities))
+        self._task_level = np.array([self._levels.index(t.priority) for t in self._tasks], dtype=np.int64)
+        self._balance_level = self._levels.index(BALANCE_PRIORITY) if balance is not None else -1
+        m = len(self._tasks)
+        self._J = np.zeros((6 * m, skeleton.n_dofs))
+        self._e = np.zeros(6 * m)
+        self._err = np.zeros((2, m))
+        self._M = np.zeros((3, 3))
+        if balance is not None:
+            self._mass_topo = topology(skeleton, skeleton.root, [skeleton.frame_names[f] for f in balance.mass.body_frame])
+            self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
+
+    # -- evaluation ----------------------------------------------------------
+    def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Position [m] and orientation [rad] error (m,) of each task (0 where a row is unused)."""
+        self._task_errors(R, p)
+        err = self._err.copy()
+        err[0, self._row_w[:, 0] <= 0.0] = 0.0
+        err[1, self._row_w[:, 3] <= 0.0] = 0.0
+        return err[0], err[1]
+
+    def _task_errors(self, R, p) -> None:
+        _kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
+                                 self._M)
+
+    def _level_state(self, q, R, p) -> tuple[np.ndarray, np.ndarray]:
+        """Cost ``0.5 e^T W e`` per level (in order, the posture's last) and whether each level is met.
+
+        A target level is met when all its targets are within half the
+        tolerances, balance when the centre of mass is inside the support
+        polygon's margin; the posture never is (it always compares by cost).
+        """
+        s = self._settings
+        self._task_errors(R, p)
+        L = len(self._levels)
+        costs = np.zeros(L + 1)
+        weighted = 0.5 * (self._row_w * self._e.reshape(-1, 6) ** 2).sum(axis=1)
+        np.add.at(costs, self._task_level, weighted)
+        missed = ((self._row_w[:, 0] > 0.0) & (self._err[0] > 0.5 * s.position_tolerance)) | \
+                 ((self._row_w[:, 3] > 0.0) & (self._err[1] > 0.5 * s.orientation_tolerance))
+        met = np.ones(L + 1, dtype=bool)
+        met[self._task_level[missed]] = False
+        met[L] = False
+        if self._balance is not None:
+            goal, com = self._support_goal(R, p)
+            outside = max(signed_distance(goal, com[:2]), 0.0)
+            costs[self._balance_level] = 0.5 * outside ** 2
+            met[self._balance_level] = outside == 0.0
+        if self._posture is not None:
+            g = q - self._posture.reference
+            P = self._posture.precision
+            costs[L] = 0.5 * float(g @ (P * g if P.ndim == 1 else P @ g))
+        return costs, met
+
+    def _support_goal(self, R, p) -> tuple[np.ndarray, np.ndarray]:
+        """The polygon the centre of mass must stay in (support shrunk by the margin) and the centre of mass."""
+        b = self._balance
+        feet = [_transform(R[f], p[f]) for f in b.feet]
+        goal = shrink(support_polygon(feet, list(b.soles)), BALANCE_MARGIN)
+        return goal, center_of_mass(b.mass, R, p)
+
+    # -- the linearised levels -------------------------------------------------
+    def levels(self, q, R, p) -> list[Level]:
+        """The linearised levels at ``q`` (frames ``R``, ``p``), in priority order, the posture last."""
+        self._task_errors(R, p)
+        _kernels.jacobian(R, p, self._sk.frame_axis, self._sk.dof_frame, self._topo.effector_frame, self._topo.sign,
+                          self._topo.effector_dofs, self._topo.effector_dof_count, self._J)
+        rows = np.repeat(self._task_level, 6)
+        weights = self._row_w.reshape(-1)
+        out = []
+        for k in range(len(self._levels)):
+            if k == self._balance_level:
+                out.append(self._balance_level_rows(R, p))
+                continue
+            sel = (rows == k) & (weights > 0.0)
+            out.append(Level(self._J[sel], self._e[sel], weights[sel]))
+        if self._posture is not None:
+            out.append(posture_level(q, self._posture.reference, self._posture.precision))
+        return out
+
+    def _balance_level_rows(self, R, p) -> Level:
+        goal, com = self._support_goal(R, p)
+        n = self._sk.n_dofs
+        if signed_distance(goal, com[:2]) <= -BALANCE_BAND:
+            return Level(np.zeros((0, n)), np.zeros(0), np.zeros(0))
+        t = self._mass_topo
+        _kernels.jacobian(R, p, self._sk.frame_axis, self._sk.dof_frame, t.effector_frame, t.sign, t.effector_dofs,
+                          t.effector_dof_count, self._Jm)
+        Jc = com_jacobian(self._balance.mass, R, self._Jm)
+        return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
+
+    def center_of_mass(self, R, p) -> np.ndarray:
+        """World centre of mass (3,) [m], or :class:`ValueError` without balance data."""
+        return center_of_mass(self._balance.mass, R, p)
+
+    # -- one step --------------------------------------------------------------
+    def step(self, q: np.ndarray, W: np.ndarray, R: np.ndarray, p: np.ndarray, lam: np.ndarray) -> ControlStats:
+        """One prioritised step from ``q`` (n_dofs,) [rad], in place on ``q``, ``R``, ``p`` and ``lam`` (1,).
+
+        ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
+        """
+        s = self._settings
+        sk = self._sk
+        costs0, met0 = self._level_state(q, R, p)
+        lo = sk.lower - q
+        hi = sk.upper - q
+        if s.max_step > 0.0:
+            lo = np.maximum(lo, -s.max_step)
+            hi = np.minimum(hi, s.max_step)
+        lo, hi = np.minimum(lo, 0.0), np.maximum(hi, 0.0)
+        damping = lam[0] if s.adaptive_damping else s.damping
+        dq = prioritized_step(self.levels(q, R, p), lo, hi, damping)
+        R2, p2 = np.empty_like(R), np.empty_like(p)
+        for tries in range(4):
+            q2 = np.clip(q + dq, sk.lower, sk.upper)
+            self._frames(q2, W, R2, p2)
+            costs, met = self._level_state(q2, R2, p2)
+            verdict = _compare(costs0, costs, met0 & met, s.settle_tolerance)
+            if verdict != "worse" or not s.adaptive_damping:
+                break
+            dq = 0.5 * dq
+        held = verdict == "same" and s.adaptive_damping
+        accepted = verdict == "better" or (not s.adaptive_damping)
+        if accepted:
+            q[:] = q2
+            R[:] = R2
+            p[:] = p2
+            if s.adaptive_damping:
+                lam[0] = max(damping * (0.5 if tries == 0 else 4.0), s.damping * _kernels.ADAPTIVE_FLOOR)
+        elif verdict == "worse":
+            lam[0] = min(damping * 10.0, 1e6)
+        step_norm = float(np.linalg.norm(dq)) if accepted else 0.0
+        return ControlStats(accepted, held, self._converged(R, p), self._target_cost(R, p), step_norm)
+
+    def _target_cost(self, R, p) -> float:
+        self._task_errors(R, p)
+        return float(0.5 * (self._row_w * self._e.reshape(-1, 6) ** 2).sum())
+
+    def _converged(self, R, p) -> bool:
+        pos, ori = self.errors(R, p)
+        s = self._settings
+        return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
+
+    def _frames(self, q, W, R, p) -> None:
+        sk = self._sk
+        _kernels.forward_kinematics(sk.frame_parent, sk.frame_offset, sk.frame_rotation, sk.frame_axis, sk.frame_dof,
+                                    q, self._root, W, R, p)
+
+
+def _compare(before: np.ndarray, after: np.ndarray, met: np.ndarray, settle: float) -> str:
+    """``"better"``, ``"worse"`` or ``"same"``: the levels compared in order (lexicographically);
+    a level ``met`` before and after counts as unchanged."""
+    for c0, c1, both_met in zip(before, after, met):
+        if both_met:
+            continue
+        if c1 > c0 * (1.0 + settle) + 1e-300:
+            return "worse"
+        if c1 < c0 * (1.0 - settle):
+            return "better"
+    return "same"
+
+
+def _transform(R, p) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T
