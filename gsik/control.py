@@ -30,6 +30,8 @@ from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_
 from gsik.kinematics import topology
 from gsik.priority import Level, posture_level, prioritized_step
 
+#: Newton steps of the target levels that may bring a posture move back onto them.
+RESTORING_STEPS = 3
 #: Balance sits between the targets of priority 0 and those of priority 1 (arms pulled at 1 cannot tip the body).
 BALANCE_PRIORITY = 0.5
 #: The centre of mass is held this far [m] inside the support polygon's edge ...
@@ -228,37 +230,65 @@ class Controller:
         ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
         """
         s = self._settings
-        sk = self._sk
-        costs0, met0 = self._level_state(q, R, p)
-        lo = sk.lower - q
-        hi = sk.upper - q
-        if s.max_step > 0.0:
-            lo = np.maximum(lo, -s.max_step)
-            hi = np.minimum(hi, s.max_step)
-        lo, hi = np.minimum(lo, 0.0), np.maximum(hi, 0.0)
+        state0 = self._level_state(q, R, p)
         damping = lam[0] if s.adaptive_damping else s.damping
-        dq = prioritized_step(self.levels(q, R, p), lo, hi, damping)
-        R2, p2 = np.empty_like(R), np.empty_like(p)
+        dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), self._dampings(damping))
         for tries in range(4):
-            q2 = np.clip(q + dq, sk.lower, sk.upper)
-            self._frames(q2, W, R2, p2)
-            costs, met = self._level_state(q2, R2, p2)
-            verdict = _compare(costs0, costs, met0 & met, s.settle_tolerance)
+            verdict, q2, R2, p2 = self._trial(q, q + dq, W, state0, damping)
             if verdict != "worse" or not s.adaptive_damping:
                 break
             dq = 0.5 * dq
-        held = verdict == "same" and s.adaptive_damping
-        accepted = verdict == "better" or (not s.adaptive_damping)
+        accepted = verdict == "better" or not s.adaptive_damping
         if accepted:
-            q[:] = q2
-            R[:] = R2
-            p[:] = p2
+            step_norm = float(np.linalg.norm(q2 - q))
+            q[:], R[:], p[:] = q2, R2, p2
             if s.adaptive_damping:
-                lam[0] = max(damping * (0.5 if tries == 0 else 4.0), s.damping * _kernels.ADAPTIVE_FLOOR)
-        elif verdict == "worse":
-            lam[0] = min(damping * 10.0, 1e6)
-        step_norm = float(np.linalg.norm(dq)) if accepted else 0.0
+                lam[0] = max(damping * 0.5, s.damping * _kernels.ADAPTIVE_FLOOR) if tries == 0 else damping
+        else:
+            step_norm = 0.0
+            if verdict == "worse":
+                lam[0] = min(damping * 10.0, 1e6)
+        held = s.adaptive_damping and (verdict == "same" or (accepted and step_norm <= s.stall_tolerance))
         return ControlStats(accepted, held, self._converged(R, p), self._target_cost(R, p), step_norm)
+
+    def _dampings(self, lam: float) -> np.ndarray:
+        """Damping per level: the adaptive one for the targets and balance, the fixed one for the
+        posture (its precision is well conditioned, and a raised damping would freeze it)."""
+        d = np.full(len(self._levels) + (self._posture is not None), lam)
+        if self._posture is not None:
+            d[-1] = self._settings.damping
+        return d
+
+    def _box(self, q: np.ndarray, q_from: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds ``lo <= dq <= hi`` (n,) of a step from ``q_from``: the limits, and the step limit counted from ``q``."""
+        s, sk = self._settings, self._sk
+        lo, hi = sk.lower - q_from, sk.upper - q_from
+        if s.max_step > 0.0:
+            lo = np.maximum(lo, q - q_from - s.max_step)
+            hi = np.minimum(hi, q - q_from + s.max_step)
+        return np.minimum(lo, 0.0), np.maximum(hi, 0.0)
+
+    def _trial(self, q, q_try, W, state0, damping):
+        """``(verdict, q, R, p)`` of a trial pose. When a lower level's move breaks a met higher level
+        (the null space is only flat to first order), up to :data:`RESTORING_STEPS` restoring steps of the target levels
+        from the trial pose brings it back onto them, and that pose is judged instead."""
+        sk = self._sk
+        R2, p2 = np.empty((sk.n_frames, 3, 3)), np.empty((sk.n_frames, 3))
+        q2 = np.clip(q_try, sk.lower, sk.upper)
+        self._frames(q2, W, R2, p2)
+        state = self._level_state(q2, R2, p2)
+        verdict = _compare(state0, state, self._settings.settle_tolerance)
+        if verdict != "worse" or self._posture is None:
+            return verdict, q2, R2, p2
+        q3, R3, p3 = q2.copy(), R2.copy(), p2.copy()
+        for _ in range(RESTORING_STEPS):
+            levels = self.levels(q3, R3, p3)[:-1]
+            q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), damping), sk.lower, sk.upper)
+            self._frames(q3, W, R3, p3)
+            restored = _compare(state0, self._level_state(q3, R3, p3), self._settings.settle_tolerance)
+            if restored != "worse":
+                return restored, q3, R3, p3
+        return verdict, q2, R2, p2
 
     def _target_cost(self, R, p) -> float:
         self._task_errors(R, p)
@@ -275,11 +305,11 @@ class Controller:
                                     q, self._root, W, R, p)
 
 
-def _compare(before: np.ndarray, after: np.ndarray, met: np.ndarray, settle: float) -> str:
-    """``"better"``, ``"worse"`` or ``"same"``: the levels compared in order (lexicographically);
-    a level ``met`` before and after counts as unchanged."""
-    for c0, c1, both_met in zip(before, after, met):
-        if both_met:
+def _compare(before: tuple, after: tuple, settle: float) -> str:
+    """``"better"``, ``"worse"`` or ``"same"``: ``(costs, met)`` of the levels compared in order
+    (lexicographically); a level met before and after counts as unchanged."""
+    for c0, c1, met0, met1 in zip(before[0], after[0], before[1], after[1]):
+        if met0 and met1:
             continue
         if c1 > c0 * (1.0 + settle) + 1e-300:
             return "worse"

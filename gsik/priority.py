@@ -67,12 +67,14 @@ def posture_level(q: np.ndarray, reference: np.ndarray, precision: np.ndarray) -
     return Level(L, L @ g, np.ones(L.shape[0]))
 
 
-def prioritized_step(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray, damping: float) -> np.ndarray:
+def prioritized_step(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray,
+                     damping: float | Sequence[float]) -> np.ndarray:
     """The step ``dq`` (n,) [rad] solving ``levels`` in strict priority order within ``lo <= dq <= hi``.
 
     Each level is a damped least-squares problem ``min |W^(1/2) (J dq - e)|^2 + damping |dq_level|^2``
     restricted to the directions the higher levels leave free and the DOFs not
-    locked at a bound. ``lo <= 0 <= hi`` (n,) is required.
+    locked at a bound. ``lo <= 0 <= hi`` (n,) is required. ``damping`` is one
+    value for every level or one per level.
     """
     lo = np.asarray(lo, dtype=float)
     hi = np.asarray(hi, dtype=float)
@@ -80,13 +82,14 @@ def prioritized_step(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray, da
     dq = np.zeros(n)
     locked = np.zeros(n, dtype=bool)
     Z = np.eye(n)  # orthonormal basis (n, r) of the directions still free
-    for level in levels:
+    dampings = np.broadcast_to(np.asarray(damping, dtype=float), (len(levels),))
+    for level, lam in zip(levels, dampings):
         if Z.shape[1] == 0:
             break
         sw = np.sqrt(np.asarray(level.weights, dtype=float))
         J = sw[:, None] * np.asarray(level.jacobian, dtype=float)
         e = sw * np.asarray(level.error, dtype=float)
-        dq, Z = _solve_level(J, e, dq, Z, locked, lo, hi, damping)
+        dq, Z = _solve_level(J, e, dq, Z, locked, lo, hi, lam)
     return np.clip(dq, lo, hi)  # rounding only: the loop keeps dq in the box
 
 
