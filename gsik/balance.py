@@ -180,8 +180,8 @@ def mass_model(skeleton, segment_mass, com_fraction, R_rest: np.ndarray, p_rest:
     Args:
         skeleton: A :class:`gsik.Skeleton`.
         segment_mass: (n_segments,) [kg] per segment; 0 for none.
-        com_fraction: (n_segments,) where each centre of mass lies, from the
-            segment's start (0) to the mean of its ends (1), at rest.
+        com_fraction: (n_segments,) where each centre of mass lies along the
+            segment's first bone, from its start (0) to its first end (1).
         R_rest, p_rest: World frames at the rest pose (n_frames, 3, 3), (n_frames, 3).
     """
     frames, com, mass = [], [], []
@@ -194,7 +194,7 @@ def mass_model(skeleton, segment_mass, com_fraction, R_rest: np.ndarray, p_rest:
         if body < 0:
             raise SkeletonError(f"segment {skeleton.segment_names[s]!r} has a mass but its points are not fixed in "
                                 f"one joint's frame (they span a moving joint); give the mass to rigid segments")
-        point = p_rest[start] + com_fraction[s] * (p_rest[ends].mean(axis=0) - p_rest[start])
+        point = p_rest[start] + com_fraction[s] * (p_rest[ends[0]] - p_rest[start])
         frames.append(body)
         com.append(R_rest[body].T @ (point - p_rest[body]))
         mass.append(m)
