@@ -1,0 +1,93 @@
+"""Blender's own BVH importer (bpy, in a subprocess) against gsik's BVH forward kinematics.
+
+What Blender does with a BVH file is written down in docs/blender_bvh.md; these tests pin it on
+small hand-written files so that the rules an exporter must follow are checked with Blender itself.
+Skipped, with the reason, where bpy is not installed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from blender import blender_import
+
+from gsik.io.bvh import bvh_forward_kinematics, read_bvh
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+CHAINS = ("blender_chain_zxy_cm.bvh", "blender_chain_zyx_m.bvh")
+
+# Blender's default import axes (axis_forward='-Z', axis_up='Y'): file x -> x, y -> z, z -> -y.
+BLENDER_FROM_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+# axis_forward='Y', axis_up='Z' is Blender's own convention: no change.
+BLENDER_FROM_Z_UP = np.eye(3)
+
+
+def _file_from_blender(points: np.ndarray, blender_from_file: np.ndarray, scale: float) -> np.ndarray:
+    """(..., 3) Blender world points back to file axes and units."""
+    return points @ blender_from_file / scale
+
+
+def _expected(path: Path) -> tuple[list[str], np.ndarray, float]:
+    """Joint names (End Sites excluded), their FK positions (n_frames, n_joints, 3), body size."""
+    clip = read_bvh(path)
+    _, world_p = bvh_forward_kinematics(clip)
+    joints = [j for j, joint in enumerate(clip.joints) if not joint.is_end_site]
+    size = float(np.ptp(world_p.reshape(-1, 3), axis=0).max())
+    return [clip.joints[j].name for j in joints], world_p[:, joints], size
+
+
+@pytest.mark.parametrize("name", CHAINS)
+@pytest.mark.parametrize(
+    ("options", "blender_from_file"),
+    [
+        ({}, BLENDER_FROM_Y_UP),
+        ({"axis_forward": "Y", "axis_up": "Z", "rotate_mode": "QUATERNION"}, BLENDER_FROM_Z_UP),
+        ({"rotate_mode": "XYZ", "global_scale": 0.01}, BLENDER_FROM_Y_UP),
+    ],
+    ids=["defaults", "z-up-quaternion", "xyz-euler-scaled"],
+)
+def test_blender_bone_heads_match_gsik_forward_kinematics(name, options, blender_from_file):
+    path = DATA / name
+    names, fk, size = _expected(path)
+    scale = options.get("global_scale", 1.0)
+    bvh_frames = [0, 1, 3, 4]
+    got = blender_import(path, frames=[1 + k for k in bvh_frames], **options)
+    assert got["ok"], got.get("error")
+    assert got["bones"] == names
+    np.testing.assert_allclose(np.array(got["global_matrix"]), blender_from_file, atol=1e-12)
+    for k in bvh_frames:
+        heads = _file_from_blender(np.array(got["heads"][1.0 + k]), blender_from_file, scale)
+        np.testing.assert_allclose(heads, fk[k], atol=1e-4 * size, err_msg=f"BVH frame {k}")
+
+
+def test_blender_makes_one_bone_per_joint_and_end_sites_become_tails():
+    path = DATA / "blender_chain_zxy_cm.bvh"
+    clip = read_bvh(path)
+    got = blender_import(path)
+    assert got["ok"], got.get("error")
+    assert got["bones"] == ["Hips", "UpperLeg", "Knee"]
+    assert got["parents"] == [None, "Hips", "UpperLeg"]
+    rest_heads = _file_from_blender(np.array(got["rest_heads"]), BLENDER_FROM_Y_UP, 1.0)
+    rest_tails = _file_from_blender(np.array(got["rest_tails"]), BLENDER_FROM_Y_UP, 1.0)
+    offsets = np.array([j.offset for j in clip.joints])
+    # Rest heads are summed OFFSETs, the root's included; the root's position channels are not used.
+    np.testing.assert_allclose(rest_heads, np.cumsum(offsets[:3], axis=0), atol=1e-4)
+    # A joint's tail is its only child's head; the last joint's tail is its End Site.
+    np.testing.assert_allclose(rest_tails[:2], rest_heads[1:], atol=1e-4)
+    np.testing.assert_allclose(rest_tails[2], rest_heads[2] + offsets[3], atol=1e-4)
+    assert got["rotation_modes"] == ["ZXY"] * 3  # NATIVE keeps the file's order
+    assert got["frame_range"] == [1.0, float(clip.n_frames)]
+
+
+@pytest.mark.parametrize(
+    ("name", "error"),
+    [("blender_knee_1dof.bvh", "KeyError: (0, None, None)"), ("blender_knee_2dof.bvh", "KeyError: (0, 1, None)")],
+)
+def test_blender_refuses_joints_with_fewer_than_three_rotation_channels(name, error):
+    # gsik reads these files; Blender's importer only knows 0 or 3 rotation channels (issue 9).
+    assert read_bvh(DATA / name).n_frames == 5
+    got = blender_import(DATA / name, frames=[1])
+    assert not got["ok"]
+    assert got["error"] == error
