@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 from blender import blender_import
 
-from gsik.io.bvh import bvh_forward_kinematics, read_bvh
+from gsik.io.bvh import BvhClip, BvhJoint, bvh_forward_kinematics, read_bvh, write_bvh
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 CHAINS = ("blender_chain_zxy_cm.bvh", "blender_chain_zyx_m.bvh")
+SHORT_KNEES = ("blender_knee_1dof.bvh", "blender_knee_2dof.bvh")
 
 # Blender's default import axes (axis_forward='-Z', axis_up='Y'): file x -> x, y -> z, z -> -y.
 BLENDER_FROM_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
@@ -91,3 +92,60 @@ def test_blender_refuses_joints_with_fewer_than_three_rotation_channels(name, er
     got = blender_import(DATA / name, frames=[1])
     assert not got["ok"]
     assert got["error"] == error
+
+
+def _three_rotation_channels(clip: BvhClip, order: str) -> BvhClip:
+    """``clip`` with every 1- or 2-rotation-channel joint written with three, the missing ones zero.
+
+    The missing axes go where ``order`` (e.g. ``"ZXY"``) puts them when the joint's own axes keep
+    that relative order, else after the joint's own: either way the product of the rotations, and so
+    every frame's pose, is unchanged (an identity factor anywhere in the product).
+    """
+    joints, columns = [], []
+    for j, joint in enumerate(clip.joints):
+        values = clip.motion[:, clip.channel_index(j)]
+        axes = [c[0] for c in joint.channels if c.endswith("rotation")]
+        if not 0 < len(axes) < 3:
+            joints.append(joint)
+            columns.append(values)
+            continue
+        assert len(axes) == len(joint.channels), "position channels on a short joint: not needed here"
+        in_order = "".join(a for a in order if a in axes) == "".join(axes)
+        new = list(order) if in_order else axes + [a for a in order if a not in axes]
+        zero = np.zeros(clip.n_frames)
+        columns.append(np.stack([values[:, axes.index(a)] if a in axes else zero for a in new], axis=1))
+        joints.append(BvhJoint(joint.name, joint.parent, joint.offset, tuple(a + "rotation" for a in new)))
+    return BvhClip(tuple(joints), clip.frame_time, np.concatenate(columns, axis=1))
+
+
+@pytest.mark.parametrize("name", SHORT_KNEES)
+@pytest.mark.parametrize("order", ["ZXY", "YZX"])
+def test_three_rotation_channels_with_zeros_make_short_joints_import_in_blender(name, order, tmp_path):
+    # The export fix of issue 9: same motion, 3 rotation channels on every rotating joint.
+    path = tmp_path / name
+    write_bvh(path, _three_rotation_channels(read_bvh(DATA / name), order))
+    names, fk, size = _expected(DATA / name)
+    got = blender_import(path, frames=[1, 3, 5])
+    assert got["ok"], got.get("error")
+    assert got["bones"] == names
+    for k in (0, 2, 4):
+        heads = _file_from_blender(np.array(got["heads"][1.0 + k]), BLENDER_FROM_Y_UP, 1.0)
+        np.testing.assert_allclose(heads, fk[k], atol=1e-4 * size, err_msg=f"BVH frame {k}")
+
+
+def test_blender_keeps_only_the_last_of_several_end_sites(tmp_path):
+    # gsik reads each End Site as a joint (Knee_end, Knee_end2); Blender makes no bone for any and
+    # takes the last one as the joint's tail, so an End Site before it leaves no trace.
+    text = (DATA / "blender_chain_zyx_m.bvh").read_text()
+    first_site = "\t\t\tEnd Site\n\t\t\t{\n\t\t\t\tOFFSET 0.0000 -0.4000 0.0500\n\t\t\t}\n"
+    assert first_site in text
+    extra = first_site.replace("-0.4000 0.0500", "0.1000 0.3000")
+    path = tmp_path / "two_end_sites.bvh"
+    path.write_text(text.replace(first_site, first_site + extra))
+    assert read_bvh(path).names == ("Hips", "UpperLeg", "Knee", "Knee_end", "Knee_end2")
+    got = blender_import(path)
+    assert got["ok"], got.get("error")
+    assert got["bones"] == ["Hips", "UpperLeg", "Knee"]
+    heads = _file_from_blender(np.array(got["rest_heads"]), BLENDER_FROM_Y_UP, 1.0)
+    tails = _file_from_blender(np.array(got["rest_tails"]), BLENDER_FROM_Y_UP, 1.0)
+    np.testing.assert_allclose(tails[2] - heads[2], [0.0, 0.1, 0.3], atol=1e-6)
