@@ -1,10 +1,10 @@
 """Run Blender's own BVH importer on a file, in a subprocess, and return what it made.
 
 bpy (Blender as a Python module, ``pip install 'bpy==4.5.*'``, Python 3.11 only) never runs in the
-test process: it would clash with Qt/VTK. The interpreter that has it is, in order:
-``$GSIK_BLENDER_PYTHON``, the repository's ``.venv-blender`` (made by ``.ci/run``), or the test
-process's own Python when ``bpy`` is installed there. Without any, callers are skipped with the
-reason.
+test process: it would clash with Qt/VTK. The interpreter that has it is ``$GSIK_BLENDER_PYTHON``
+(``.ci/run`` sets it to its ``.venv-blender``), else the test process's own Python when ``bpy`` is
+installed there (``pip install -r tests/blender/requirements.txt``). Without either, callers are
+skipped with the reason.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from pathlib import Path
 import pytest
 
 HARNESS = Path(__file__).with_name("blender_bvh.py")
-_REPO = Path(__file__).resolve().parents[2]
 _MARKER = "GSIK_BLENDER_JSON "
 
 
@@ -29,15 +28,12 @@ def blender_python() -> tuple[str | None, str]:
     env = os.environ.get("GSIK_BLENDER_PYTHON")
     if env:
         return env, f"GSIK_BLENDER_PYTHON={env}"
-    venv = _REPO / ".venv-blender" / "bin" / "python"
-    if venv.exists():
-        return str(venv), str(venv)
     if importlib.util.find_spec("bpy") is not None:  # find, never import, in this process
         return sys.executable, f"bpy installed for {sys.executable}"
     return None, (
         f"bpy (Blender as a Python module) is not installed for {sys.executable} "
-        f"(Python {sys.version_info.major}.{sys.version_info.minor}); bpy==4.5.* needs Python 3.11: "
-        "pip install 'bpy==4.5.*' or set GSIK_BLENDER_PYTHON"
+        f"(Python {sys.version_info.major}.{sys.version_info.minor}; bpy==4.5.* needs 3.11): "
+        "pip install -r tests/blender/requirements.txt, or set GSIK_BLENDER_PYTHON to a Python that has it"
     )
 
 
