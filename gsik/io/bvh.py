@@ -26,12 +26,11 @@ import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cached_property
-from pathlib import Path
 
 import numpy as np
 
 from gsik.errors import BvhError, choices
-from gsik.io.files import atomic_write_text, file_error
+from gsik.io.files import atomic_write_text, read_text
 from gsik.rotations import matrix_from_cos_sin
 
 #: The six BVH channel names, in canonical spelling.
@@ -623,18 +622,6 @@ def parse_bvh(text: str, source: str = "<string>") -> BvhClip:
     return BvhClip(joints=joints, frame_time=frame_time, motion=motion)
 
 
-def _read_text(path: str | os.PathLike) -> str:
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise file_error("cannot read BVH file", path, exc) from exc
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        # Old exporters write Latin-1 names; every byte decodes.
-        return data.decode("latin-1")
-
-
 def read_bvh(path: str | os.PathLike) -> BvhClip:
     """Read and parse a BVH file (UTF-8, or Latin-1 as a fallback).
 
@@ -642,7 +629,8 @@ def read_bvh(path: str | os.PathLike) -> BvhClip:
         BvhError: malformed file (message names the path and line).
         GsikFileError: the file cannot be read.
     """
-    return parse_bvh(_read_text(path), source=os.fspath(path))
+    # Old exporters write Latin-1 names; every byte decodes.
+    return parse_bvh(read_text(path, "BVH file", "utf-8-sig", fallback="latin-1"), source=os.fspath(path))
 
 
 # ---------------------------------------------------------------------------

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from gsik.errors import SkeletonError, choices
+from gsik.errors import GsikFileError, SkeletonError, choices
+from gsik.io.files import read_text
 from gsik.rotations import matrix_from_quaternion
 from gsik.skeleton import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
 
@@ -42,11 +43,9 @@ def load_skeleton(name_or_path: str | os.PathLike) -> Skeleton:
             raise SkeletonError(f"no bundled skeleton {s!r}; bundled: {choices(bundled)} (or give a path to a .yaml file)")
         path = _bundled_dir() / f"{s}.yaml"
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SkeletonError(f"cannot read skeleton file {str(path)!r}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise SkeletonError(f"{path}: not a UTF-8 text file ({exc.reason})") from None
+        text = read_text(path, "skeleton file")
+    except GsikFileError as exc:  # a skeleton that cannot be loaded is a SkeletonError, whatever the cause
+        raise SkeletonError(str(exc)) from None
     return skeleton_from_yaml(text, source=str(path))
 
 

@@ -16,12 +16,11 @@ import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from functools import cached_property
-from pathlib import Path
 
 import numpy as np
 
 from gsik.errors import UrdfError, choices
-from gsik.io.files import file_error
+from gsik.io.files import read_bytes
 
 #: Joint types this module parses (prismatic is parsed; conversion may reject it).
 JOINT_TYPES = ("revolute", "continuous", "fixed", "prismatic")
@@ -463,10 +462,7 @@ def read_urdf(path: str | os.PathLike) -> UrdfRobot:
         GsikFileError: the file cannot be read.
     """
     source = os.fspath(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise file_error("cannot read URDF file", path, exc) from exc
+    data = read_bytes(path, "URDF file")  # bytes: the XML parser decodes them as declared
     return _robot_from_xml(_xml_root(data, source), source)
 
 
