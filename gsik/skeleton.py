@@ -33,14 +33,9 @@ import numpy as np
 
 from gsik.errors import SkeletonError, choices
 from gsik.rotations import is_rotation_matrix
+from gsik.validate import frozen, vector
 
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
-
-
-def _frozen(a, dtype=float) -> np.ndarray:
-    a = np.array(a, dtype=dtype)
-    a.flags.writeable = False
-    return a
 
 
 @dataclass(frozen=True)
@@ -270,15 +265,7 @@ def _axis_label(axis, k: int) -> str:
 
 
 def _vector(value, what: str) -> tuple[float, float, float]:
-    try:
-        v = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise SkeletonError(f"{what} must be 3 numbers, got {value!r}") from None
-    if v.shape != (3,):
-        raise SkeletonError(f"{what} must be 3 numbers, got {value!r}")
-    if not np.all(np.isfinite(v)):
-        raise SkeletonError(f"{what} must be finite, got {value!r}")
-    return (float(v[0]), float(v[1]), float(v[2]))
+    return vector(value, 3, what, SkeletonError)
 
 
 def _orientation(value, what: str) -> np.ndarray:
@@ -500,26 +487,26 @@ class _SkeletonBuilder:
             name=name,
             root=self.root,
             frame_names=tuple(frames.names),
-            frame_parent=_frozen(frames.parent, np.int64),
-            frame_offset=_frozen(np.reshape(frames.offset, (-1, 3))),
-            frame_rotation=_frozen(np.reshape(frames.rotation, (-1, 3, 3))),
-            frame_axis=_frozen(np.reshape(frames.axis, (-1, 3))),
-            frame_dof=_frozen(frames.dof, np.int64),
+            frame_parent=frozen(frames.parent, np.int64),
+            frame_offset=frozen(np.reshape(frames.offset, (-1, 3))),
+            frame_rotation=frozen(np.reshape(frames.rotation, (-1, 3, 3))),
+            frame_axis=frozen(np.reshape(frames.axis, (-1, 3))),
+            frame_dof=frozen(frames.dof, np.int64),
             dof_names=tuple(dofs.names),
-            dof_frame=_frozen(dofs.frame, np.int64),
-            lower=_frozen(dofs.lower),
-            upper=_frozen(dofs.upper),
-            rest=_frozen(dofs.rest),
+            dof_frame=frozen(dofs.frame, np.int64),
+            lower=frozen(dofs.lower),
+            upper=frozen(dofs.upper),
+            rest=frozen(dofs.rest),
             joint_names=tuple(order),
-            joint_frame=_frozen([self.joint_frame[n] for n in order], np.int64),
-            joint_parent=_frozen(joint_parent, np.int64),
+            joint_frame=frozen([self.joint_frame[n] for n in order], np.int64),
+            joint_parent=frozen(joint_parent, np.int64),
             joint_dofs=tuple(self.joint_dofs[n] for n in order),
             site_names=tuple(self.site_names),
-            site_frame=_frozen(self.site_frame, np.int64),
+            site_frame=frozen(self.site_frame, np.int64),
             effector_sites=self.effectors,
             segment_names=tuple(self.segment_names),
-            bone_frames=_frozen(np.reshape(self.bones, (-1, 2)), np.int64),
-            bone_segment=_frozen(self.bone_segment, np.int64),
+            bone_frames=frozen(np.reshape(self.bones, (-1, 2)), np.int64),
+            bone_segment=frozen(self.bone_segment, np.int64),
             source=self.source,
         )
 

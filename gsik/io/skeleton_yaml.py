@@ -6,10 +6,10 @@ import os
 from importlib import resources
 from pathlib import Path
 
-import numpy as np
 import yaml
 
 from gsik.errors import GsikFileError, SkeletonError, choices
+from gsik import validate
 from gsik.io.files import read_text
 from gsik.rotations import matrix_from_quaternion
 from gsik.skeleton import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
@@ -86,20 +86,21 @@ class _Fields:
             return default
         return self.data[key]
 
+    def checked(self, check, *args):
+        """``check(*args, SkeletonError)`` from :mod:`gsik.validate`, its error naming this place."""
+        try:
+            return check(*args, SkeletonError)
+        except SkeletonError as exc:
+            self.fail(str(exc))
+
     def name(self, key: str = "name", default=...) -> str | None:
         v = self.get(key, default)
         if v is None and default is None:
             return None
-        if not isinstance(v, str) or not v.strip():
-            self.fail(f"{key} must be a non-empty string, got {v!r}")
-        return v
+        return self.checked(validate.name, v, key)
 
     def number(self, value, what: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(f"{what} must be a number, got {value!r}")
-        if not np.isfinite(value):
-            self.fail(f"{what} must be finite, got {value!r}")
-        return float(value)
+        return self.checked(validate.number, value, what)
 
     def vector(self, key: str, n: int = 3, default=...) -> tuple[float, ...]:
         v = self.get(key, default)
@@ -110,13 +111,11 @@ class _Fields:
         return tuple(self.number(x, f"{key}[{i}]") for i, x in enumerate(v))
 
     def orientation(self, key: str = "orientation"):
-        q = self.vector(key, 4, default=None)
+        q = self.get(key, None)
         if q is None:
             return None
-        norm = float(np.linalg.norm(q))
-        if abs(norm - 1.0) > 1e-3:
-            self.fail(f"{key} must be a unit quaternion [w, x, y, z], got norm {norm:.6g}")
-        return matrix_from_quaternion(np.asarray(q) / norm)
+        self.vector(key, 4)
+        return matrix_from_quaternion(self.checked(validate.unit_quaternion, q, key))
 
 
 def _axis(f: _Fields, value) -> tuple[float, float, float]:

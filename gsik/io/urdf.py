@@ -21,6 +21,7 @@ import numpy as np
 
 from gsik.errors import UrdfError, choices
 from gsik.io.files import read_bytes
+from gsik.validate import finite_array
 
 #: Joint types this module parses (prismatic is parsed; conversion may reject it).
 JOINT_TYPES = ("revolute", "continuous", "fixed", "prismatic")
@@ -32,13 +33,7 @@ _NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 def _frozen_vector(v, what: str) -> np.ndarray:
-    a = np.array(v, dtype=float)
-    if a.shape != (3,):
-        raise UrdfError(f"{what} must have shape (3,), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise UrdfError(f"{what} {a.tolist()} is not finite")
-    a.flags.writeable = False
-    return a
+    return finite_array(v, (3,), what, UrdfError)
 
 
 @dataclass(frozen=True, eq=False)
