@@ -10,6 +10,7 @@ import numpy as np
 
 from gsik.anim.gait.params import GAIT_SITES, WALK_SETTINGS, WALK_STEPS_PER_FRAME, GaitPlan, WalkParameters
 from gsik.anim.gait.plan import plan_walk
+from gsik import validate
 from gsik.anim.motion import Motion
 from gsik.errors import GaitError
 from gsik.kinematics import world_frames
@@ -47,9 +48,7 @@ def walk_frames(solver: Solver, plan: GaitPlan, steps_per_frame: int = WALK_STEP
         plan: From :func:`plan_walk`.
         steps_per_frame: Solver steps (linearisations) per frame, >= 1.
     """
-    if isinstance(steps_per_frame, bool) or not isinstance(steps_per_frame, (int, np.integer)) \
-            or steps_per_frame < 1:
-        raise GaitError(f"steps_per_frame must be a whole number >= 1, got {steps_per_frame!r}")
+    validate.whole(steps_per_frame, "steps_per_frame", GaitError, 1)
     skeleton = solver.skeleton
     if skeleton.frame_names != plan.skeleton.frame_names:
         raise GaitError(f"the solver's skeleton {skeleton.name!r} is not the plan's {plan.skeleton.name!r}")
