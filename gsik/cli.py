@@ -328,8 +328,8 @@ def cmd_walk(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def cmd_scenarios(args: argparse.Namespace, out: TextIO) -> int:
-    from gsik.anim.scenarios import (SCENARIO_NAMES, builtin_scenario, format_table, random_scenarios, run_scenario,
-                                scenario_pose)
+    from gsik.anim.scenario_run import format_table, run_scenario
+    from gsik.anim.scenarios import SCENARIO_NAMES, builtin_scenario, random_scenarios, scenario_pose
 
     if args.random < 0:
         raise CommandError(f"--random must be >= 0, got {args.random}")

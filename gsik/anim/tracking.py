@@ -180,22 +180,27 @@ def _check_inputs(skeleton: Skeleton, motion: Motion, steps_per_frame: int) -> N
 def _effector_pairs(skeleton: Skeleton, clip_sk: Skeleton, effectors, root: str) -> dict[str, str]:
     """``{effector of skeleton: clip joint or site it follows}``, the root left out (it is pinned)."""
     available = [n for n in skeleton.effector_sites if n != root]
-    if effectors is None:
-        in_clip = set(clip_sk.site_names) | set(clip_sk.joint_names)
-        pairs = {n: n for n in available if n in in_clip}
-        if not pairs:
-            raise SolverError(f"the clip has none of the skeleton's effectors {choices(available)}; "
-                              "name them with effectors={effector: clip name}")
-    elif isinstance(effectors, Mapping):
-        pairs = dict(effectors)
-    else:
-        pairs = {n: n for n in ([effectors] if isinstance(effectors, str) else effectors)}
+    pairs = _requested_pairs(clip_sk, effectors, available)
     pairs.pop(root, None)  # pinned where the clip has it: tracked exactly
     allowed = set(available)
     for name in pairs:
         if name not in allowed:
             raise SolverError(f"{name!r} is not an effector of skeleton {skeleton.name!r}; "
                               f"effectors: {choices(available)}")
+    return pairs
+
+
+def _requested_pairs(clip_sk: Skeleton, effectors, available: list[str]) -> dict[str, str]:
+    """The pairs as asked: a mapping, names (or one name) followed by the same name, or every shared effector."""
+    if isinstance(effectors, Mapping):
+        return dict(effectors)
+    if effectors is not None:
+        return {n: n for n in ([effectors] if isinstance(effectors, str) else effectors)}
+    in_clip = set(clip_sk.site_names) | set(clip_sk.joint_names)
+    pairs = {n: n for n in available if n in in_clip}
+    if not pairs:
+        raise SolverError(f"the clip has none of the skeleton's effectors {choices(available)}; "
+                          "name them with effectors={effector: clip name}")
     return pairs
 
 
