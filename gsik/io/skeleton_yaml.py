@@ -161,48 +161,48 @@ def skeleton_from_dict(data, source: str = "<memory>") -> Skeleton:
     if top.get("units", "m") != "m":
         top.fail(f"units must be 'm' (metres), got {top.get('units')!r}")
     name = top.name("name")
-
     joints_data = top.get("joints")
     if not isinstance(joints_data, list) or not joints_data:
         top.fail(f"joints must be a non-empty list, got {joints_data!r}")
-    joints = []
-    for i, jd in enumerate(joints_data):
-        f = _Fields(jd, f"joints[{i}]", source)
-        jname = f.name()
-        f.where = f"joints[{i}] ({jname})"
-        f.check_keys(("name", "parent", "offset", "rotations", "orientation"))
-        rots = f.get("rotations", [])
-        if not isinstance(rots, list):
-            f.fail(f"rotations must be a list, got {rots!r}")
-        joints.append(JointSpec(
-            name=jname,
-            parent=f.name("parent", None),
-            offset=f.vector("offset", default=(0.0, 0.0, 0.0)),
-            rotations=tuple(_rotation(f, r, k) for k, r in enumerate(rots)),
-            orientation=f.orientation(),
-        ))
-
-    sites = []
-    for i, sd in enumerate(_list(top, "sites")):
-        f = _Fields(sd, f"sites[{i}]", source)
-        f.check_keys(("name", "parent", "offset", "orientation"))
-        sites.append(SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)),
-                              f.orientation()))
-    segments = []
-    for i, sd in enumerate(_list(top, "segments")):
-        f = _Fields(sd, f"segments[{i}]", source)
-        f.check_keys(("name", "from", "to"))
-        to = f.get("to")
-        ends = [to] if isinstance(to, str) else to
-        if not isinstance(ends, list) or not ends or not all(isinstance(e, str) and e for e in ends):
-            f.fail(f"to must be a joint or site name or a list of them, got {to!r}")
-        segments.append(SegmentSpec(f.name(), f.name("from"), tuple(ends)))
+    joints = [_joint(_Fields(jd, f"joints[{i}]", source), i) for i, jd in enumerate(joints_data)]
+    sites = [_site(_Fields(sd, f"sites[{i}]", source)) for i, sd in enumerate(_list(top, "sites"))]
+    segments = [_segment(_Fields(sd, f"segments[{i}]", source)) for i, sd in enumerate(_list(top, "segments"))]
     effectors = _list(top, "effectors")
     for e in effectors:
         if not isinstance(e, str):
             top.fail(f"effectors must be a list of site names, got {e!r}")
     root = top.name("root", None)
     return build_skeleton(name, joints, sites, segments, effectors, root, source)
+
+
+def _joint(f: _Fields, i: int) -> JointSpec:
+    jname = f.name()
+    f.where = f"joints[{i}] ({jname})"
+    f.check_keys(("name", "parent", "offset", "rotations", "orientation"))
+    rots = f.get("rotations", [])
+    if not isinstance(rots, list):
+        f.fail(f"rotations must be a list, got {rots!r}")
+    return JointSpec(
+        name=jname,
+        parent=f.name("parent", None),
+        offset=f.vector("offset", default=(0.0, 0.0, 0.0)),
+        rotations=tuple(_rotation(f, r, k) for k, r in enumerate(rots)),
+        orientation=f.orientation(),
+    )
+
+
+def _site(f: _Fields) -> SiteSpec:
+    f.check_keys(("name", "parent", "offset", "orientation"))
+    return SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)), f.orientation())
+
+
+def _segment(f: _Fields) -> SegmentSpec:
+    f.check_keys(("name", "from", "to"))
+    to = f.get("to")
+    ends = [to] if isinstance(to, str) else to
+    if not isinstance(ends, list) or not ends or not all(isinstance(e, str) and e for e in ends):
+        f.fail(f"to must be a joint or site name or a list of them, got {to!r}")
+    return SegmentSpec(f.name(), f.name("from"), tuple(ends))
 
 
 def _list(top: _Fields, key: str) -> list:
