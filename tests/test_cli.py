@@ -319,13 +319,6 @@ def test_bench_quick_prints_the_tables():
     assert "### Table 1" in text and "### Reach" in text
 
 
-def test_a_missing_feature_fails_with_a_clear_message(monkeypatch, walk_bvh, capsys):
-    monkeypatch.setitem(sys.modules, "gsik.anim.tracking", None)  # as if the module were not installed
-    assert run("track", str(walk_bvh))[0] == 1
-    err = capsys.readouterr().err
-    assert err.startswith("gsik: error: clip tracking is not available in this installation")
-
-
 def test_progress_bar_draws_only_when_enabled_and_slow():
     stream = io.StringIO()
     with Progress("work", enabled=True, stream=stream, delay=0.0, width=10) as p:

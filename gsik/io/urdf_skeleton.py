@@ -75,12 +75,10 @@ def skeleton_from_urdf(
         GsikFileError: the file cannot be read.
     """
     robot = robot_or_path if isinstance(robot_or_path, UrdfRobot) else read_urdf(robot_or_path)
-    if isinstance(continuous_limit, bool) or not isinstance(continuous_limit, (int, float)) \
-            or not (math.isfinite(continuous_limit) and continuous_limit > 0):
-        raise UrdfError(f"continuous_limit must be a positive angle [rad], got {continuous_limit!r}")
+    continuous_limit = _check_continuous_limit(continuous_limit)
     site_of = link_site_names(robot)
     top = unique_name(f"{robot.root_link}_root", set(site_of.values()) | {j.name for j in robot.joints})
-    specs, joint_of_link = _joint_specs(robot, top, float(continuous_limit))
+    specs, joint_of_link = _joint_specs(robot, top, continuous_limit)
     sites = [SiteSpec(site_of[link], joint_of_link[link], (0.0, 0.0, 0.0)) for link in robot.links]
     names = _Names(robot, site_of, set(joint_of_link.values()))
     if effectors is None:
@@ -90,6 +88,12 @@ def skeleton_from_urdf(
     root_name = site_of[robot.root_link] if root is None else names.resolve(root, "root")
     return build_skeleton(robot.name or "robot", specs, sites, _segments(robot, site_of), effectors=chosen,
                           root=root_name, source=f"<urdf {robot.name}>")
+
+
+def _check_continuous_limit(value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and value > 0):
+        raise UrdfError(f"continuous_limit must be a positive angle [rad], got {value!r}")
+    return float(value)
 
 
 def _joint_specs(robot: UrdfRobot, top: str, continuous_limit: float) -> tuple[list[JointSpec], dict[str, str]]:
