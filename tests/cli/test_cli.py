@@ -18,7 +18,7 @@ from gsik.cli import Progress, build_parser, main
 from gsik.io.pose import read_pose, write_pose
 from gsik.anim.scenarios import builtin_scenario, scenario_pose
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 REPO = Path(gsik.__file__).resolve().parent.parent
 COMMANDS = ("info", "solve", "walk", "scenarios", "track", "bench")
 
