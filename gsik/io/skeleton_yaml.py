@@ -140,11 +140,7 @@ def _rotation(f: _Fields, data, k: int) -> RotationSpec:
     if not isinstance(limits, (list, tuple)) or len(limits) != 2:
         r.fail(f"limits must be [lower, upper] in rad, got {limits!r}")
     lo, hi = (r.number(x, f"limits[{i}]") for i, x in enumerate(limits))
-    if lo > hi:
-        r.fail(f"lower limit {lo} is above upper limit {hi}")
-    rest = r.number(r.get("rest", 0.0), "rest")
-    if not lo <= rest <= hi:
-        r.fail(f"rest angle {rest} is outside the limits [{lo}, {hi}]")
+    rest = r.number(r.get("rest", 0.0), "rest")  # limits and rest are checked once, by build_skeleton
     label = r.get("label", None)
     if label is None and isinstance(raw_axis, str):
         label = raw_axis.strip().lower().lstrip("+-")
