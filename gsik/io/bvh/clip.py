@@ -8,6 +8,7 @@ from functools import cached_property
 import numpy as np
 
 from gsik.errors import BvhError, choices
+from gsik.validate import finite_array
 
 #: The six BVH channel names, in canonical spelling.
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
@@ -36,13 +37,7 @@ class BvhJoint:
     is_end_site: bool = False
 
     def __post_init__(self) -> None:
-        offset = np.array(self.offset, dtype=float)
-        if offset.shape != (3,):
-            raise BvhError(f"joint {self.name!r}: offset must have shape (3,), got {offset.shape}")
-        if not np.all(np.isfinite(offset)):
-            raise BvhError(f"joint {self.name!r}: offset {offset.tolist()} is not finite")
-        offset.flags.writeable = False
-        object.__setattr__(self, "offset", offset)
+        object.__setattr__(self, "offset", finite_array(self.offset, (3,), f"joint {self.name!r}: offset", BvhError))
         channels = tuple(self.channels)
         for c in channels:
             if c not in CHANNEL_NAMES:
