@@ -104,6 +104,8 @@ def support_polygon(world_from_feet: list[np.ndarray], soles: list[np.ndarray]) 
 
 def signed_distance(polygon: np.ndarray, point: np.ndarray) -> float:
     """Distance [m] from ``point`` (2,) to a convex counter-clockwise ``polygon`` (k, 2): negative inside."""
+    if len(polygon) == 1:
+        return float(np.linalg.norm(np.asarray(point)[:2] - polygon[0]))
     return float(np.max(_edge_distances(polygon, point)))
 
 

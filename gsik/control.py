@@ -25,6 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik import _kernels
+from gsik.errors import SolverError
 from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
     support_polygon
 from gsik.kinematics import topology
@@ -113,6 +114,8 @@ class Controller:
     def __init__(self, skeleton, tasks, posture: Posture | None, balance: Balance | None, settings):
         self._sk = skeleton
         self._settings = settings
+        if balance is not None and not balance.feet:
+            balance = None  # no foot on the ground: nothing to stand on
         self._posture = posture
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
@@ -182,6 +185,11 @@ class Controller:
             costs[L] = 0.5 * float(g @ (P * g if P.ndim == 1 else P @ g))
         return costs, met
 
+    def rank(self, q, R, p) -> tuple:
+        """The levels' costs in priority order (a met level counts 0): compare poses lexicographically."""
+        costs, met = self._level_state(q, R, p)
+        return tuple(np.where(met, 0.0, costs).tolist())
+
     def _support_goal(self, R, p) -> tuple[np.ndarray, np.ndarray]:
         """The polygon the centre of mass must stay in (support shrunk by the margin) and the centre of mass."""
         b = self._balance
@@ -219,10 +227,6 @@ class Controller:
         Jc = com_jacobian(self._balance.mass, R, self._Jm)
         return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
 
-    def center_of_mass(self, R, p) -> np.ndarray:
-        """World centre of mass (3,) [m], or :class:`ValueError` without balance data."""
-        return center_of_mass(self._balance.mass, R, p)
-
     # -- one step --------------------------------------------------------------
     def step(self, q: np.ndarray, W: np.ndarray, R: np.ndarray, p: np.ndarray, lam: np.ndarray) -> ControlStats:
         """One prioritised step from ``q`` (n_dofs,) [rad], in place on ``q``, ``R``, ``p`` and ``lam`` (1,).
@@ -249,7 +253,7 @@ class Controller:
             if verdict == "worse":
                 lam[0] = min(damping * 10.0, 1e6)
         held = s.adaptive_damping and (verdict == "same" or (accepted and step_norm <= s.stall_tolerance))
-        return ControlStats(accepted, held, self._converged(R, p), self._target_cost(R, p), step_norm)
+        return ControlStats(accepted, held, self.converged(R, p), self.target_cost(R, p), step_norm)
 
     def _dampings(self, lam: float) -> np.ndarray:
         """Damping per level: the adaptive one for the targets and balance, the fixed one for the
@@ -290,11 +294,13 @@ class Controller:
                 return restored, q3, R3, p3
         return verdict, q2, R2, p2
 
-    def _target_cost(self, R, p) -> float:
+    def target_cost(self, R, p) -> float:
+        """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
         self._task_errors(R, p)
         return float(0.5 * (self._row_w * self._e.reshape(-1, 6) ** 2).sum())
 
-    def _converged(self, R, p) -> bool:
+    def converged(self, R, p) -> bool:
+        """True if every target is within the position and orientation tolerances."""
         pos, ori = self.errors(R, p)
         s = self._settings
         return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
@@ -303,6 +309,36 @@ class Controller:
         sk = self._sk
         _kernels.forward_kinematics(sk.frame_parent, sk.frame_offset, sk.frame_rotation, sk.frame_axis, sk.frame_dof,
                                     q, self._root, W, R, p)
+
+
+def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]:
+    """The :class:`FrameTask` of each ``{name: gsik.Target}``."""
+    tasks = []
+    for name, t in targets.items():
+        w = np.zeros(6)
+        w[:3] = t.weight
+        if t.uses_orientation:
+            w[3:] = t.weight * orientation_weight
+        rotation = np.eye(3) if t.orientation is None else t.orientation
+        tasks.append(FrameTask(name, skeleton.frame_of(name), t.position, rotation, w, t.priority))
+    return tasks
+
+
+#: A foot whose target is within this height [m] of the standing foot is on the ground too.
+GROUND_TOLERANCE = 0.01
+
+
+def support(skeleton, targets, p: np.ndarray) -> Balance:
+    """The :class:`Balance` of ``skeleton`` seen from its root: the root foot, and every other foot with a
+    sole whose target is on the ground (the root foot's height); ``p`` (n_frames, 3) the world positions [m]."""
+    if skeleton.total_mass <= 0.0:
+        raise SolverError(f"balance needs segment masses; skeleton {skeleton.name!r} gives none "
+                          "(see skeletons/README.md: segments' mass)")
+    ground = p[skeleton.frame_of(skeleton.root)][2] if skeleton.root in skeleton.soles else 0.0
+    feet = [n for n in skeleton.soles if n == skeleton.root
+            or (n in targets and abs(targets[n].position[2] - ground) <= GROUND_TOLERANCE)]
+    return Balance(skeleton.mass_model, tuple(skeleton.frame_of(n) for n in feet),
+                   tuple(skeleton.soles[n] for n in feet))
 
 
 def _compare(before: tuple, after: tuple, settle: float) -> str:

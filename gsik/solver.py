@@ -18,7 +18,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik import _kernels
+from gsik import _kernels, control
+from gsik.balance import center_of_mass
 from gsik.errors import SolverError, TargetError, choices
 from gsik.kinematics import Topology, model_arrays, topology
 from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix, transform
@@ -257,6 +258,9 @@ class Solver:
             raise SolverError(f"world_from_root must be a finite (4, 4) transform, got shape {W.shape}")
         self._W = W
         self._targets: dict[str, Target] = {}
+        self._posture: control.Posture | None = None
+        self._balance = False
+        self._controller: control.Controller | None = None
         self._args = None
         self._solve_vector_for = None
         self._x = np.zeros(skeleton.n_dofs)
@@ -288,6 +292,7 @@ class Solver:
 
     def _set_topology(self, root: str) -> None:
         self._args = None
+        self._controller = None
         self._skeleton = self._skeleton.with_root(root)
         self._topo: Topology = topology(self._skeleton, root)
         self._model = model_arrays(self._skeleton, self._topo)
@@ -310,6 +315,7 @@ class Solver:
         _kernels.forward_kinematics(*self._fk_args(self._topo.root_frame, self._W), self._R, self._p)
 
     def _pack_targets(self) -> None:
+        self._controller = None
         ow = self._settings.orientation_weight
         self._row_w[:] = 0.0
         for k, name in enumerate(self._topo.effector_names):
@@ -348,6 +354,16 @@ class Solver:
     def effector_names(self) -> tuple[str, ...]:
         """The effectors for the current root: every effector site but the root."""
         return self._topo.effector_names
+
+    @property
+    def target_names(self) -> tuple[str, ...]:
+        """Every name a target may aim at: the effectors first, then the other joints and sites (not the root)."""
+        rest = (n for n in self._skeleton.target_names if n not in self._topo.effector_names and n != self.root)
+        return self._topo.effector_names + tuple(rest)
+
+    @property
+    def _target_index(self) -> frozenset:
+        return frozenset(self._skeleton.target_names)
 
     @property
     def world_from_root(self) -> np.ndarray:
@@ -432,9 +448,11 @@ class Solver:
             raise TargetError(f"targets must be a mapping of effector name to Target, got {type(targets).__name__}")
         out = {}
         for name, t in targets.items():
-            if name not in self._topo.effector_names:
+            if name not in self._topo.effector_names and (name == self.root or name not in self._target_index):
                 extra = f" ({name!r} is the IK root)" if name == self.root else ""
-                raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}")
+                others = [n for n in self.target_names if n not in self._topo.effector_names]
+                raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}; "
+                                  f"other joints and sites: {choices(others)}")
             if t is None:
                 continue
             if not isinstance(t, Target):
@@ -450,6 +468,8 @@ class Solver:
         """
         if targets is not None:
             self.set_targets(targets)
+        if self._controlled():
+            return self._control_step()
         _kernels.step(*(self._args or self._step_args()))
         return self._result(self._stats, _kernels.O_RESIDUAL, 1)
 
@@ -492,32 +512,47 @@ class Solver:
             stats, attempts = self._restart(start, stats)
         self._x[:] = 0.0
         self._lam[0] = s.damping
+        if self._controlled():
+            return self._control_result(_STATUSES[int(stats[_kernels.O_STATUS])], int(stats[_kernels.O_ITERATIONS]),
+                                        float(stats[_kernels.O_COST]), float(stats[_kernels.O_STEP_NORM]), attempts)
         return self._result(stats, _kernels.O_COST, attempts)
 
     def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
         """Further attempts after a failed first one; leaves the best attempt as the state."""
         s = self._settings
         sk = self._skeleton
-        best = (stats[_kernels.O_COST], self._q.copy(), stats)
+        best = (self._attempt_rank(stats), self._q.copy(), stats)
         rng = np.random.default_rng(s.seed)
         attempts = 1
         while stats[_kernels.O_STATUS] != _kernels.CONVERGED and attempts <= s.restarts:
-            if attempts == 1:
+            if attempts == 1 and self._posture is not None:
+                stats = self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
+            elif attempts == 1:
                 stats = self._solve_by_continuation(start)
             else:
                 # Random restarts: ever bolder blends of the start with a random pose within the limits.
                 alpha = min(1.0, 0.25 * attempts)
                 stats = self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
             attempts += 1
-            if stats[_kernels.O_STATUS] == _kernels.CONVERGED or stats[_kernels.O_COST] < best[0]:
-                best = (stats[_kernels.O_COST], self._q.copy(), stats)
+            rank = self._attempt_rank(stats)
+            if stats[_kernels.O_STATUS] == _kernels.CONVERGED or rank < best[0]:
+                best = (rank, self._q.copy(), stats)
         if best[2] is not stats:
             # An earlier attempt was best: make it the state again (frames and errors included).
             self._solve_from(best[1], iterations=0)
         return best[2], attempts
 
+    def _attempt_rank(self, stats: np.ndarray) -> tuple:
+        """How good the attempt that just ended is (lower is better): its weighted error, or with
+        priorities its levels' errors in order, so no attempt is preferred for a lower level's sake."""
+        if self._controlled():
+            return self._make_controller().rank(self._q, self._R, self._p)
+        return (float(stats[_kernels.O_COST]),)
+
     def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
         s = self._settings
+        if self._controlled():
+            return self._control_solve(q0, s.max_iterations if iterations is None else iterations)
         if self._solve_vector_for is not s:
             self._solve_vector = s.vector(sweeps=s.solve_sweeps)
             self._solve_vector_for = s
@@ -571,3 +606,136 @@ class Solver:
             self._targets[old] = Target.from_transform(old_pose)
             self._pack_targets()
         self._x[:] = 0.0
+
+    # -- artist control: priorities, targets on any frame, posture, balance ------------------
+    def set_posture(self, q=None, weights=1.0) -> None:
+        """Prefer the pose ``q`` (n_dofs,) [rad] (default: the rest pose), below every target.
+
+        The posture is the lowest priority level: it only chooses among the
+        poses that meet the targets as well as they can be met, so it never
+        costs target accuracy. ``weights``: a scalar or one per DOF (n_dofs,)
+        (>= 0; 0 turns the posture off), or a symmetric positive semi-definite
+        precision matrix (n_dofs, n_dofs); the posture minimises
+        ``(q - q_ref)^T P (q - q_ref)`` with ``P = diag(weights)`` or that matrix.
+        """
+        sk = self._skeleton
+        ref = sk.rest.copy() if q is None else np.clip(sk.validate_q(q), sk.lower, sk.upper)
+        P = _posture_precision(weights, sk.n_dofs)
+        self._posture = None if not np.any(P) else control.Posture(ref, P)
+        self._controller = None
+
+    @property
+    def posture(self) -> control.Posture | None:
+        """The preferred posture (reference (n_dofs,) [rad], precision), or ``None`` when off."""
+        return self._posture
+
+    def set_balance(self, on: bool = True) -> None:
+        """Hold the centre of mass's ground projection over the support polygon (or stop).
+
+        The support is the root foot's sole, and the sole of every other foot
+        whose target lies on the ground (the root foot's height, within 1 cm):
+        the convex hull of both feet when the free foot is planted. Balance
+        ranks below the targets of priority 0 and above those of priority 1
+        (:data:`gsik.control.BALANCE_PRIORITY`): a hand pulled at priority 1
+        cannot tip the body over.
+
+        Raises:
+            SolverError: if the skeleton gives no segment masses.
+        """
+        if on:
+            self._mass_model()
+        self._balance = bool(on)
+        self._controller = None
+
+    @property
+    def balance(self) -> bool:
+        """True while balance is on."""
+        return self._balance
+
+    def center_of_mass(self) -> np.ndarray:
+        """The centre of mass (3,) in the world [m] at the current angles.
+
+        Raises:
+            SolverError: if the skeleton gives no segment masses.
+        """
+        return center_of_mass(self._mass_model(), self._R, self._p)
+
+    def _mass_model(self):
+        if self._skeleton.total_mass <= 0.0:
+            raise SolverError(f"the centre of mass needs segment masses; skeleton {self._skeleton.name!r} gives "
+                              "none (see skeletons/README.md: segments' mass)")
+        return self._skeleton.mass_model
+
+    def _controlled_targets(self) -> bool:
+        """True if the targets need the prioritised path: several levels, or a target off the effectors."""
+        levels = {t.priority for t in self._targets.values()}
+        return len(levels) > 1 or any(n not in self._topo.effector_names for n in self._targets)
+
+    def _controlled(self) -> bool:
+        """True when a step needs :class:`gsik.control.Controller` rather than the fast kernel."""
+        return self._posture is not None or self._balance or self._controlled_targets()
+
+    def _make_controller(self) -> control.Controller:
+        if self._controller is None:
+            sk = self._skeleton
+            tasks = control.frame_tasks(sk, self._targets, self._settings.orientation_weight)
+            balance = control.support(sk, self._targets, self._p) if self._balance else None
+            self._controller = control.Controller(sk, tasks, self._posture, balance, self._settings)
+        return self._controller
+
+    def _control_step(self) -> SolveResult:
+        st = self._make_controller().step(self._q, self._W, self._R, self._p, self._lam)
+        status = Status.CONVERGED if st.converged else Status.STALLED if st.held else Status.BUDGET_EXHAUSTED
+        return self._control_result(status, 1, st.cost, st.step_norm, 1)
+
+    def _control_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
+        """One attempt of prioritised steps from ``q0`` until the pose holds; statistics as the kernel's solve."""
+        c = self._make_controller()
+        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
+        self._refresh_frames()
+        lam = np.array([self._settings.damping])
+        settles = self._posture is not None or self._balance  # keep going after convergence until they hold
+        st = None
+        it = 0
+        for it in range(1, iterations + 1):
+            st = c.step(self._q, self._W, self._R, self._p, lam)
+            if st.held or (st.converged and not settles):
+                break
+        stats = np.zeros(_kernels.N_STATS)
+        converged = c.converged(self._R, self._p)
+        stats[_kernels.O_STATUS] = (_kernels.CONVERGED if converged else _kernels.STALLED if st is not None and st.held
+                                    else _kernels.BUDGET_EXHAUSTED)
+        stats[_kernels.O_ITERATIONS] = it if iterations else 0
+        stats[_kernels.O_COST] = c.target_cost(self._R, self._p)
+        stats[_kernels.O_STEP_NORM] = 0.0 if st is None else st.step_norm
+        return stats
+
+    def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
+                        attempts: int) -> SolveResult:
+        """A result naming every effector, then the other targeted frames, with their errors."""
+        c = self._make_controller()
+        pos, ori = c.errors(self._R, self._p)
+        names = self._topo.effector_names + tuple(n for n in c.names if n not in self._topo.effector_names)
+        where = {n: k for k, n in enumerate(c.names)}
+        out = np.zeros((2, len(names)))
+        for k, n in enumerate(names):
+            if n in where:
+                out[:, k] = pos[where[n]], ori[where[n]]
+        return SolveResult(self._q.copy(), status, iterations, 0, residual, names, out[0], out[1], step_norm, attempts)
+
+
+def _posture_precision(weights, n: int) -> np.ndarray:
+    """Posture weights as a precision: (n,) per DOF, or (n, n); checked."""
+    try:
+        P = np.array(weights, dtype=float)
+    except (TypeError, ValueError):
+        raise SolverError(f"posture weights must be numbers, got {weights!r}") from None
+    if P.ndim == 0:
+        P = np.full(n, float(P))
+    if P.shape not in ((n,), (n, n)) or not np.all(np.isfinite(P)):
+        raise SolverError(f"posture weights must be finite: a scalar, ({n},) or ({n}, {n}), got shape {P.shape}")
+    if P.ndim == 1 and np.any(P < 0):
+        raise SolverError(f"posture weights must be >= 0, got {P[P < 0][0]!r}")
+    if P.ndim == 2 and (not np.allclose(P, P.T) or np.linalg.eigvalsh(P).min() < -1e-9 * max(1.0, abs(P).max())):
+        raise SolverError("posture weights as a matrix must be symmetric positive semi-definite")
+    return P

@@ -20,6 +20,10 @@ class Target:
             quaternion (4,) ``(w, x, y, z)``; ``None`` for position only.
         weight: Relative importance (>= 0) in the weighted least squares.
         position_only: Ignore the orientation (kept, so it can be re-enabled).
+        priority: Strict priority level: 0 (the default) is the most important;
+            a target on level k is met only in what the levels below k leave
+            free, so it never moves them. Targets on one level trade off by
+            ``weight``.
 
     Raises:
         TargetError: on NaN or infinite values, wrong shapes, a matrix that
@@ -34,6 +38,7 @@ class Target:
     orientation: np.ndarray | None = None
     weight: float = 1.0
     position_only: bool = False
+    priority: int = 0
 
     def __post_init__(self):
         try:
@@ -56,6 +61,7 @@ class Target:
             raise TargetError(f"target weight must be finite and >= 0, got {self.weight!r}")
         object.__setattr__(self, "weight", w)
         object.__setattr__(self, "position_only", bool(self.position_only))
+        object.__setattr__(self, "priority", _priority(self.priority))
 
     @property
     def uses_orientation(self) -> bool:
@@ -78,9 +84,15 @@ class Target:
     def replace(self, **changes) -> Target:
         """A copy with some fields changed (validated again)."""
         fields = dict(position=self.position, orientation=self.orientation, weight=self.weight,
-                      position_only=self.position_only)
+                      position_only=self.position_only, priority=self.priority)
         fields.update(changes)
         return Target(**fields)
+
+
+def _priority(value) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise TargetError(f"target priority must be a whole number >= 0 (0 is the most important), got {value!r}")
+    return int(value)
 
 
 def _rotation(value) -> np.ndarray:
