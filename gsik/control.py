@@ -37,8 +37,10 @@ RESTORING_STEPS = 3
 BALANCE_PRIORITY = 0.5
 #: The centre of mass is held this far [m] inside the support polygon's edge ...
 BALANCE_MARGIN = 0.01
-#: ... and pulled back once it comes within this band [m] of that line, so it never chatters across it.
+#: ... and pulled back once it comes within this band [m] of that line, so it never chatters across it;
 BALANCE_BAND = 0.005
+#: ... a drift this far [m] past that line (second order, from lower levels' moves) still counts as balanced.
+BALANCE_TOLERANCE = 0.001
 
 
 class FrameTask(NamedTuple):
@@ -161,7 +163,7 @@ class Controller:
 
         A target level is met when all its targets are within half the
         tolerances, balance when the centre of mass is inside the support
-        polygon's margin; the posture never is (it always compares by cost).
+        polygon's margin (within :data:`BALANCE_TOLERANCE`); the posture never is (it always compares by cost).
         """
         s = self._settings
         self._task_errors(R, p)
@@ -178,7 +180,7 @@ class Controller:
             goal, com = self._support_goal(R, p)
             outside = max(signed_distance(goal, com[:2]), 0.0)
             costs[self._balance_level] = 0.5 * outside ** 2
-            met[self._balance_level] = outside == 0.0
+            met[self._balance_level] = outside <= BALANCE_TOLERANCE
         if self._posture is not None:
             g = q - self._posture.reference
             P = self._posture.precision

@@ -498,7 +498,12 @@ class Solver:
         first a continuation (the targets approached in stages from the
         current effector poses), then random restarts inside the limits.
         The best attempt (lowest weighted error) is kept and becomes the
-        solver's state.
+        solver's state. With priorities, posture or balance each attempt runs
+        prioritised steps until the pose holds (:mod:`gsik.control`),
+        attempts are compared level by level, and the first further attempt
+        starts from the posture; a converged attempt whose posture is not met
+        is compared with one from the posture too, as the targets may be met
+        on another branch nearer to it.
         """
         if targets is not None:
             self.set_targets(targets)
@@ -510,6 +515,8 @@ class Solver:
         attempts = 1
         if stats[_kernels.O_STATUS] != _kernels.CONVERGED and s.restarts > 0:
             stats, attempts = self._restart(start, stats)
+        elif s.restarts > 0 and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0:
+            stats, attempts = self._posture_attempt(stats)
         self._x[:] = 0.0
         self._lam[0] = s.damping
         if self._controlled():
@@ -541,6 +548,15 @@ class Solver:
             # An earlier attempt was best: make it the state again (frames and errors included).
             self._solve_from(best[1], iterations=0)
         return best[2], attempts
+
+    def _posture_attempt(self, stats: np.ndarray) -> tuple[np.ndarray, int]:
+        """A second attempt from the posture after a converged first one; the better one stays the state."""
+        first = (self._attempt_rank(stats), self._q.copy(), stats)
+        second = self._solve_from(self._posture.reference)
+        if second[_kernels.O_STATUS] == _kernels.CONVERGED and self._attempt_rank(second) < first[0]:
+            return second, 2
+        self._solve_from(first[1], iterations=0)
+        return first[2], 2
 
     def _attempt_rank(self, stats: np.ndarray) -> tuple:
         """How good the attempt that just ended is (lower is better): its weighted error, or with
