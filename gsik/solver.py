@@ -316,6 +316,7 @@ class Solver:
 
     def _pack_targets(self) -> None:
         self._controller = None
+        self._is_controlled = self._posture is not None or self._balance or self._controlled_targets()
         ow = self._settings.orientation_weight
         self._row_w[:] = 0.0
         for k, name in enumerate(self._topo.effector_names):
@@ -638,7 +639,7 @@ class Solver:
         ref = sk.rest.copy() if q is None else np.clip(sk.validate_q(q), sk.lower, sk.upper)
         P = _posture_precision(weights, sk.n_dofs)
         self._posture = None if not np.any(P) else control.Posture(ref, P)
-        self._controller = None
+        self._pack_targets()
 
     @property
     def posture(self) -> control.Posture | None:
@@ -661,7 +662,7 @@ class Solver:
         if on:
             self._mass_model()
         self._balance = bool(on)
-        self._controller = None
+        self._pack_targets()
 
     @property
     def balance(self) -> bool:
@@ -689,7 +690,7 @@ class Solver:
 
     def _controlled(self) -> bool:
         """True when a step needs :class:`gsik.control.Controller` rather than the fast kernel."""
-        return self._posture is not None or self._balance or self._controlled_targets()
+        return self._is_controlled
 
     def _make_controller(self) -> control.Controller:
         if self._controller is None:
