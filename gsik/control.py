@@ -25,6 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik import _kernels
+from gsik._kernels import ADAPTIVE_FLOOR
 from gsik.errors import SolverError
 from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
     support_polygon
@@ -156,7 +157,7 @@ class Controller:
 
     def _task_errors(self, R, p) -> None:
         _kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
-                                 self._M)
+                                 self._M)  # same signature in every kernel layout
 
     def _level_state(self, q, R, p) -> tuple[np.ndarray, np.ndarray]:
         """Cost ``0.5 e^T W e`` per level (in order, the posture's last) and whether each level is met.
@@ -203,8 +204,7 @@ class Controller:
     def levels(self, q, R, p) -> list[Level]:
         """The linearised levels at ``q`` (frames ``R``, ``p``), in priority order, the posture last."""
         self._task_errors(R, p)
-        _kernels.jacobian(R, p, self._sk.frame_axis, self._sk.dof_frame, self._topo.effector_frame, self._topo.sign,
-                          self._topo.effector_dofs, self._topo.effector_dof_count, self._J)
+        _jacobian(self._sk, self._topo, R, p, self._J)
         rows = np.repeat(self._task_level, 6)
         weights = self._row_w.reshape(-1)
         out = []
@@ -224,8 +224,7 @@ class Controller:
         if signed_distance(goal, com[:2]) <= -BALANCE_BAND:
             return Level(np.zeros((0, n)), np.zeros(0), np.zeros(0))
         t = self._mass_topo
-        _kernels.jacobian(R, p, self._sk.frame_axis, self._sk.dof_frame, t.effector_frame, t.sign, t.effector_dofs,
-                          t.effector_dof_count, self._Jm)
+        _jacobian(self._sk, t, R, p, self._Jm)
         Jc = com_jacobian(self._balance.mass, R, self._Jm)
         return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
 
@@ -249,7 +248,7 @@ class Controller:
             step_norm = float(np.linalg.norm(q2 - q))
             q[:], R[:], p[:] = q2, R2, p2
             if s.adaptive_damping:
-                lam[0] = max(damping * 0.5, s.damping * _kernels.ADAPTIVE_FLOOR) if tries == 0 else damping
+                lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
         else:
             step_norm = 0.0
             if verdict == "worse":
@@ -308,9 +307,20 @@ class Controller:
         return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
 
     def _frames(self, q, W, R, p) -> None:
-        sk = self._sk
-        _kernels.forward_kinematics(sk.frame_parent, sk.frame_offset, sk.frame_rotation, sk.frame_axis, sk.frame_dof,
-                                    q, self._root, W, R, p)
+        _forward_kinematics(self._sk, q, self._root, W, R, p)
+
+
+# -- the kernels, in one place ------------------------------------------------------------------
+def _jacobian(skeleton, topo, R, p, J) -> None:
+    """Fill ``J`` (6 m, n_dofs) for the frames of ``topo`` (a :class:`gsik.kinematics.Topology`)."""
+    _kernels.jacobian(R, p, skeleton.frame_axis, skeleton.dof_frame, topo.effector_frame, topo.sign,
+                      topo.effector_dofs, topo.effector_dof_count, J)
+
+
+def _forward_kinematics(skeleton, q, root_frame, W, R, p) -> None:
+    """World frames into ``R``, ``p`` at ``q``, frame ``root_frame`` pinned at ``W``."""
+    _kernels.forward_kinematics(skeleton.frame_parent, skeleton.frame_offset, skeleton.frame_rotation,
+                                skeleton.frame_axis, skeleton.frame_dof, q, root_frame, W, R, p)
 
 
 def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]:

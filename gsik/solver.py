@@ -469,7 +469,7 @@ class Solver:
         """
         if targets is not None:
             self.set_targets(targets)
-        if self._controlled():
+        if self._is_controlled:
             return self._control_step()
         _kernels.step(*(self._args or self._step_args()))
         return self._result(self._stats, _kernels.O_RESIDUAL, 1)
@@ -520,7 +520,7 @@ class Solver:
             stats, attempts = self._posture_attempt(stats)
         self._x[:] = 0.0
         self._lam[0] = s.damping
-        if self._controlled():
+        if self._is_controlled:
             return self._control_result(_STATUSES[int(stats[_kernels.O_STATUS])], int(stats[_kernels.O_ITERATIONS]),
                                         float(stats[_kernels.O_COST]), float(stats[_kernels.O_STEP_NORM]), attempts)
         return self._result(stats, _kernels.O_COST, attempts)
@@ -562,13 +562,13 @@ class Solver:
     def _attempt_rank(self, stats: np.ndarray) -> tuple:
         """How good the attempt that just ended is (lower is better): its weighted error, or with
         priorities its levels' errors in order, so no attempt is preferred for a lower level's sake."""
-        if self._controlled():
+        if self._is_controlled:
             return self._make_controller().rank(self._q, self._R, self._p)
         return (float(stats[_kernels.O_COST]),)
 
     def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
         s = self._settings
-        if self._controlled():
+        if self._is_controlled:
             return self._control_solve(q0, s.max_iterations if iterations is None else iterations)
         if self._solve_vector_for is not s:
             self._solve_vector = s.vector(sweeps=s.solve_sweeps)
@@ -687,10 +687,6 @@ class Solver:
         """True if the targets need the prioritised path: several levels, or a target off the effectors."""
         levels = {t.priority for t in self._targets.values()}
         return len(levels) > 1 or any(n not in self._topo.effector_names for n in self._targets)
-
-    def _controlled(self) -> bool:
-        """True when a step needs :class:`gsik.control.Controller` rather than the fast kernel."""
-        return self._is_controlled
 
     def _make_controller(self) -> control.Controller:
         if self._controller is None:
