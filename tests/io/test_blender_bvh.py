@@ -159,9 +159,6 @@ def test_blender_keeps_only_the_last_of_several_end_sites(tmp_path):
 # gsik's own exports (issue 9): the command line's files, read by Blender
 # ---------------------------------------------------------------------------
 
-_ISSUE_9 = "issue 9: gsik writes knees/elbows with 1 and the atlas with 2 rotation channels; Blender needs 3"
-
-
 @pytest.fixture(scope="module")
 def exports(tmp_path_factory) -> dict[str, Path]:
     """BVH files written by ``gsik walk``, ``gsik scenarios`` and ``gsik track`` (a few seconds)."""
@@ -179,12 +176,10 @@ def exports(tmp_path_factory) -> dict[str, Path]:
     return {"walk": out / "walk.bvh", "scenario": out / "kneel.bvh", "track": out / "track.bvh"}
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=_ISSUE_9)
 def test_gsik_walk_export_imports_in_blender_on_its_fk(exports):
     _assert_blender_heads_on_fk(exports["walk"], [0, 18, 36])
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=_ISSUE_9)
 def test_gsik_scenario_export_imports_in_blender_on_its_fk(exports):
     # scenarios write z-up by default
     _assert_blender_heads_on_fk(exports["scenario"], [0, 5, 9], BLENDER_FROM_Z_UP, axis_forward="Y", axis_up="Z")

@@ -67,8 +67,9 @@ def smooth_motion(sk: gsik.Skeleton, n_frames: int, seed: int, roots=None) -> Mo
     return Motion(sk, q, tuple(roots), W_root, 1.0 / 30.0)
 
 
-def round_trip(motion: Motion, file_units: str, file_up: str, **import_options):
-    text = format_bvh(motion_to_bvh(motion, units=file_units, up=file_up), PRECISION[file_units])
+def round_trip(motion: Motion, file_units: str, file_up: str, pad_rotations: bool = True, **import_options):
+    clip = motion_to_bvh(motion, units=file_units, up=file_up, pad_rotations=pad_rotations)
+    text = format_bvh(clip, PRECISION[file_units])
     return import_bvh(parse_bvh(text), **import_options)
 
 
@@ -147,8 +148,15 @@ def test_export_of_the_biped_is_rooted_at_hips_with_exact_channels(biped):
     assert np.array_equal(clip.joints[0].offset, [0.0, 0.0, 0.0])
     by_name = {j.name: j for j in clip.joints}
     assert by_name["left_hip"].channels == ("Xrotation", "Yrotation", "Zrotation")
-    assert by_name["left_knee"].channels == ("Xrotation",)
-    assert by_name["atlas"].channels == ("Xrotation", "Yrotation")
+    # Knees and the atlas get three rotation channels (Blender needs 0 or 3), the added ones locked at 0 ...
+    assert by_name["left_knee"].channels == ("Xrotation", "Yrotation", "Zrotation")
+    assert by_name["atlas"].channels == ("Xrotation", "Yrotation", "Zrotation")
+    knee = clip.channel_index("left_knee")
+    assert np.array_equal(clip.motion[:, knee][:, 1:], np.zeros((1, 2)))
+    # ... or only their own with pad_rotations=False.
+    exact = {j.name: j for j in pose_to_bvh(biped, biped.rest, pad_rotations=False).joints}
+    assert exact["left_knee"].channels == ("Xrotation",)
+    assert exact["atlas"].channels == ("Xrotation", "Yrotation")
     np.testing.assert_allclose(by_name["left_knee"].offset, [0.0, 0.0, -42.0])  # centimetres by default
     # The root channels carry the top joint's world pose: where the definition stands it by default...
     np.testing.assert_allclose(clip.motion[0, :6], [0.0, 0.0, 97.97, 0.0, 0.0, 0.0], atol=1e-9)
@@ -225,7 +233,13 @@ def test_round_trip_reproduces_every_joint_and_site_of_the_biped(biped, rng, uni
 
 
 def test_round_trip_keeps_the_biped_structure(biped):
-    imported = round_trip(smooth_motion(biped, 5, seed=1), "cm", "z").skeleton
+    padded = round_trip(smooth_motion(biped, 5, seed=1), "cm", "z")
+    # The locked channels of knees, elbows and atlas come back as DOFs that stay 0.
+    extra = sorted(set(padded.skeleton.dof_names) - set(biped.dof_names))
+    assert extra == sorted(f"{j}.{a}" for j, a in [("atlas", "z"), *((f"{s}_{j}", a) for s in ("left", "right")
+                                                    for j in ("elbow", "knee") for a in "yz")])
+    assert not np.any(padded.motion.q[:, [padded.skeleton.dof_index(n) for n in extra]])
+    imported = round_trip(smooth_motion(biped, 5, seed=1), "cm", "z", pad_rotations=False).skeleton
     assert set(imported.joint_names) == set(biped.joint_names)
     assert set(imported.site_names) == set(biped.site_names)
     assert sorted(imported.dof_names) == sorted(biped.dof_names)

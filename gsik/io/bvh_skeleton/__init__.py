@@ -21,10 +21,15 @@ Conventions of the export (:func:`motion_to_bvh`, :func:`pose_to_bvh`,
   round never meets gimbal lock).
 * **Joints.** Every other gsik joint is a ``JOINT`` with its definition offset.
   A joint whose rotation axes are coordinate axes (after the up-axis change)
-  and that has no fixed ``orientation`` gets exactly its one-DOF rotations as
-  channels, in its own order, angles in degrees (the biped's knee is
-  ``CHANNELS 1 Xrotation``, its hip ``Xrotation Yrotation Zrotation``). Any
-  other joint (a fixed ``orientation``, oblique axes) gets three channels in
+  and that has no fixed ``orientation`` gets its one-DOF rotations as
+  channels, in its own order, angles in degrees (the biped's hip is
+  ``Xrotation Yrotation Zrotation``). A joint with one or two such rotations
+  gets three rotation channels all the same (``pad_rotations=True``, the
+  default; Blender's importer accepts only 0 or 3): the missing axes locked
+  at 0, placed where the skeleton's usual order puts them if the joint's own
+  axes keep that order, else after them (the biped's knee is ``CHANNELS 3
+  Xrotation Yrotation Zrotation`` z-up, the 0s changing nothing). Any other
+  joint (a fixed ``orientation``, oblique axes) gets three channels in
   :data:`EULER_ORDER`, decomposed from its local rotation matrix, unwrapped
   over the frames so the angles are continuous. A joint without rotations
   gets ``CHANNELS 0``.
@@ -34,6 +39,9 @@ Conventions of the export (:func:`motion_to_bvh`, :func:`pose_to_bvh`,
   clip has the same effectors; readers that draw bones show the forearm ending
   at the hand. A site's fixed orientation is not written (BVH has no place for
   it). A joint with neither child joints nor sites gets a zero ``End Site``.
+  With ``end_sites=True`` a site that is its joint's only child is written as
+  that joint's ``End Site`` instead (no extra bone in Blender, but the name is
+  lost: a re-import calls it ``<joint>_end``).
 * **Units.** ``units="cm"`` (the default: most animation tools expect
   centimetres) or ``"m"``.
 * **Up axis.** ``up="z"`` (the default, gsik's own world) or ``"y"``: the
