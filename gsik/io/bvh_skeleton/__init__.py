@@ -80,14 +80,21 @@ Conventions of the import (:func:`import_bvh`, :func:`skeleton_from_bvh`):
 * **Units.** ``scale`` is metres per file unit. By default it is detected from
   the size of the rest pose (the hierarchy's offsets, root offset excluded):
   up to 10 units across is metres, up to 1000 centimetres, more millimetres.
-* **Up axis.** ``up="auto"`` (the default) takes y when the rest pose is taller
-  along y than along z, else z; a y-up file is turned to gsik's z-up world
-  (the inverse of the export's turn), so an export with either ``up``
-  re-imports exactly.
+* **Up axis.** ``up="auto"`` (the default) judges the whole clip
+  (:func:`detect_up_reason`): the axis along which the body is tallest in the
+  median frame, gravity (the lowest point keeps its height along the up axis)
+  deciding close calls; a y-up file is turned to gsik's z-up world (the
+  inverse of the export's turn), so an export with either ``up`` re-imports
+  exactly.
+* **Angles** are unwrapped per channel: a channel that jumps by about 360
+  degrees between frames (-178 to +180) continues past 180 instead, so the
+  motion's angles are continuous and the solver never meets a limit the clip
+  only crosses by wrapping.
 * **Limits.** ``limits="wide"``: [-pi, pi] for each angle, widened where the
-  clip goes further; ``"from_motion"``: the clip's range of each angle plus
-  ``margin`` on both sides. Either way every frame of the clip lies within the
-  limits. The rest angle is 0 (the file's rest pose), clamped into the limits.
+  (unwrapped) clip goes further; ``"from_motion"``: the clip's range of each
+  angle plus ``margin`` on both sides. Either way every frame of the clip lies
+  within the limits. The rest angle is 0 (the file's rest pose), clamped into
+  the limits.
 
 Conversion errors raise :class:`~gsik.errors.BvhError`.
 """
@@ -97,7 +104,8 @@ from gsik.io.bvh_skeleton.conventions import (
     matrix_from_euler,
 )
 from gsik.io.bvh_skeleton.export import motion_to_bvh, pose_to_bvh, write_motion_bvh
-from gsik.io.bvh_skeleton.importer import BvhImport, detect_scale, detect_up, import_bvh, skeleton_from_bvh
+from gsik.io.bvh_skeleton.importer import (BvhImport, detect_scale, detect_up, detect_up_reason, import_bvh,
+                                          skeleton_from_bvh)
 
 __all__ = [
     "EULER_ORDER",
@@ -109,6 +117,7 @@ __all__ = [
     "BvhImportWarning",
     "detect_scale",
     "detect_up",
+    "detect_up_reason",
     "euler_from_matrix",
     "import_bvh",
     "matrix_from_euler",
