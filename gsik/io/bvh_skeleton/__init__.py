@@ -96,6 +96,11 @@ Conventions of the import (:func:`import_bvh`, :func:`skeleton_from_bvh`):
   within the limits. The rest angle is 0 (the file's rest pose), clamped into
   the limits.
 
+Writing a solved motion back (:func:`clip_with_motion`): the clip a motion
+was imported from, its motion numbers replaced, so the output keeps the
+input's names (namespaces included), End Sites, root OFFSET and channels,
+channel orders, units, up axis, frame time and frame count.
+
 Conversion errors raise :class:`~gsik.errors.BvhError`.
 """
 
@@ -104,6 +109,7 @@ from gsik.io.bvh_skeleton.conventions import (
     matrix_from_euler,
 )
 from gsik.io.bvh_skeleton.export import motion_to_bvh, pose_to_bvh, write_motion_bvh
+from gsik.io.bvh_skeleton.keep import clip_with_motion
 from gsik.io.bvh_skeleton.importer import (BvhImport, detect_scale, detect_up, detect_up_reason, import_bvh,
                                           skeleton_from_bvh)
 
@@ -115,6 +121,7 @@ __all__ = [
     "Z_UP_TO_Y_UP",
     "BvhImport",
     "BvhImportWarning",
+    "clip_with_motion",
     "detect_scale",
     "detect_up",
     "detect_up_reason",
