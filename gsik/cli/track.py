@@ -90,7 +90,7 @@ def _targets(args: argparse.Namespace) -> tuple[list[str] | None, bool | list[st
         targets = [*targets, *(p for p in poles if p not in targets)]
         priorities.update({p: below for p in poles if p not in priorities})
         if position_only is not True:
-            position_only = [*position_only, *poles]
+            position_only = [*(position_only or []), *poles]
     return targets, position_only, priorities or None
 
 
