@@ -16,8 +16,10 @@ from gsik.io.bvh_skeleton import (
     EULER_ORDER,
     Z_UP_TO_Y_UP,
     BvhImportWarning,
+    clip_with_motion,
     detect_scale,
     detect_up,
+    detect_up_reason,
     euler_from_matrix,
     import_bvh,
     matrix_from_euler,
@@ -495,3 +497,90 @@ def test_imported_clip_with_no_frames_gives_an_empty_motion():
     result = import_bvh(clip, up="z")
     assert result.motion.n_frames == 0
     assert result.skeleton.n_dofs == 6
+
+
+# ---------------------------------------------------------------------------
+# Issue 9: padded short joints, wrapping channels, whole-clip up axis, writing back into the clip
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("up", ["z", "y"])
+def test_padded_short_joints_keep_every_frame_of_the_motion(biped, up):
+    motion = smooth_motion(biped, 12, seed=5)
+    padded = motion_to_bvh(motion, units="m", up=up)
+    exact = motion_to_bvh(motion, units="m", up=up, pad_rotations=False)
+    rotations = {j.name: [c for c in j.channels if c.endswith("rotation")] for j in padded.joints}
+    assert all(len(r) in (0, 3) for r in rotations.values())
+    # One order for every rotating joint but the root (which turns about the vertical first).
+    assert len({tuple(r) for name, r in rotations.items() if r and name != "hips"}) == 1
+    np.testing.assert_allclose(bvh_forward_kinematics(padded)[1], bvh_forward_kinematics(exact)[1], atol=1e-12)
+
+
+def test_export_with_end_sites_writes_lone_sites_as_end_sites(biped):
+    clip = pose_to_bvh(biped, biped.rest, end_sites=True)
+    assert "left_hand" not in clip.names and "head" in clip.names  # the atlas holds head and head_top: joints
+    hand = clip.joint_index("left_elbow_end")
+    assert clip.joints[hand].is_end_site
+    np.testing.assert_allclose(clip.joints[hand].offset, 100 * biped.frame_offset[biped.frame_of("left_hand")])
+
+
+def test_import_unwraps_a_wrapping_channel_and_its_limits_follow():
+    clip = read_bvh(DATA / "wrap_channel.bvh")
+    raw = clip.motion[:, clip.channel_index("Spine").start + 1]
+    assert np.abs(np.diff(raw)).max() > 300  # the file wraps: +178 -> -178
+    imported = import_bvh(clip)
+    sk, q = imported.skeleton, imported.motion.q
+    d = sk.dof_index("Spine.y")
+    assert np.abs(np.diff(np.degrees(q[:, d]))).max() < 15  # continuous
+    turns = (q[:, d] - np.radians(raw)) / (2 * np.pi)
+    np.testing.assert_allclose(turns, np.round(turns), atol=1e-12)
+    assert sk.lower[d] <= q[:, d].min() and q[:, d].max() <= sk.upper[d] and np.abs(q[:, d]).max() > np.pi
+    # Unwrapping changes nothing in the poses.
+    np.testing.assert_allclose(imported.motion.positions()[:, [sk.frame_of(n) for n in clip.names]],
+                               clip_world_positions(clip, 0.01, "y"), atol=1e-9)
+
+
+def test_up_axis_is_judged_over_the_whole_clip_not_its_rest_pose_or_first_frame():
+    clip = read_bvh(DATA / "up_misleading_first_frame.bvh")
+    rest = clip_world_positions(BvhClip(clip.joints, clip.frame_time, np.zeros((1, clip.n_channels))), 1.0, "z")
+    first = bvh_forward_kinematics(clip)[1][0]
+    assert np.ptp(rest[0][:, 2]) > np.ptp(rest[0][:, 1]) and np.ptp(first[:, 2]) > np.ptp(first[:, 1])
+    assert detect_up(clip) == "y"
+    up, why = detect_up_reason(clip)
+    assert up == "y" and why.startswith("y up: over 30 frames the body is")
+    assert import_bvh(clip).up_reason == why
+    assert import_bvh(clip, up="z").up_reason == "as given"
+
+
+@pytest.mark.parametrize("name", ["wrap_channel.bvh", "mixamo_zyx_crlf.bvh", "blender_chain_zyx_m.bvh"])
+def test_clip_with_its_own_motion_is_the_clip(name):
+    clip = read_bvh(DATA / name)
+    imported = import_bvh(clip, strip_namespace=name.startswith("mixamo"))
+    back = clip_with_motion(imported, imported.motion)
+    assert back.joints == clip.joints and back.frame_time == clip.frame_time
+    diff = back.motion - clip.motion
+    np.testing.assert_allclose(diff, 360.0 * np.round(diff / 360.0), atol=1e-9)  # whole turns at most
+    np.testing.assert_allclose(clip_with_motion(imported, imported.motion, wrap_angles=True).motion,
+                               _wrapped(clip), atol=1e-9)
+
+
+def _wrapped(clip: BvhClip) -> np.ndarray:
+    """The clip's motion with its rotation channels in [-180, 180)."""
+    out = clip.motion.copy()
+    rot = [k for k, c in enumerate(c for j in clip.joints for c in j.channels) if c.endswith("rotation")]
+    out[:, rot] = np.remainder(out[:, rot] + 180.0, 360.0) - 180.0
+    return out
+
+
+def test_clip_with_motion_recomputes_the_root_when_another_joint_was_pinned():
+    clip = read_bvh(DATA / "walk_zxy.bvh")
+    imported = import_bvh(clip)
+    sk, motion = imported.skeleton, imported.motion
+    foot = "LeftLeg_end"
+    W = np.array([gsik.rotations.transform(*[a[sk.frame_of(foot)] for a in motion.frames(f)])
+                  for f in range(motion.n_frames)])
+    repinned = Motion(sk, motion.q, (foot,) * motion.n_frames, W, motion.frame_time)
+    back = clip_with_motion(imported, repinned)
+    np.testing.assert_allclose(bvh_forward_kinematics(back)[1], bvh_forward_kinematics(clip)[1], atol=1e-6)
+    with pytest.raises(BvhError, match="the motion has 2 frames, the clip 4"):
+        clip_with_motion(imported, Motion(sk, motion.q[:2], motion.roots[:2], motion.world_from_root[:2], 0.1))
