@@ -90,8 +90,10 @@ Conventions of the import (:func:`import_bvh`, :func:`skeleton_from_bvh`):
   degrees between frames (-178 to +180) continues past 180 instead, so the
   motion's angles are continuous and the solver never meets a limit the clip
   only crosses by wrapping.
-* **Limits.** ``limits="wide"``: [-pi, pi] for each angle, widened where the
-  (unwrapped) clip goes further; ``"from_motion"``: the clip's range of each
+* **Limits.** ``limits="wide"``: [-pi, pi] for each angle; an (unwrapped)
+  angle that goes further gets half a turn of room beyond the clip's range on
+  both sides, so a spinning joint never meets a limit the clip does not;
+  ``"from_motion"``: the clip's range of each
   angle plus ``margin`` on both sides. Either way every frame of the clip lies
   within the limits. The rest angle is 0 (the file's rest pose), clamped into
   the limits.

@@ -127,6 +127,7 @@ def import_bvh(
     up: Literal["auto", "y", "z"] = "auto",
     strip_namespace: bool = False,
     name: str = "bvh",
+    unwrap: bool = True,
 ) -> BvhImport:
     """A BVH clip as a gsik skeleton and motion (see the module's conventions).
 
@@ -141,13 +142,15 @@ def import_bvh(
         up: The file's up axis: ``"y"``, ``"z"`` or ``"auto"`` (:func:`detect_up`).
         strip_namespace: Drop ``"prefix:"`` from joint names.
         name: The skeleton's name.
+        unwrap: Unwrap each rotation channel over the frames (default); ``False``
+            takes the file's angles as they are (limits then stop at a wrap).
 
     Raises:
         BvhError: a bad argument, an unknown effector or root (listing the
             valid names), or names that clash once their namespace is stripped.
     """
     scale, (up, up_reason) = _check_import_args(clip, limits, margin, scale, up)
-    b = _Importer(clip, _local_names(clip, strip_namespace), scale, up)
+    b = _Importer(clip, _local_names(clip, strip_namespace), scale, up, bool(unwrap))
     b.add_joints_and_sites()
     b.set_limits(limits, margin)
     chosen = b.default_effectors() if effectors is None else b.named_effectors(effectors)
@@ -190,8 +193,8 @@ class _Importer:
         messages: What cannot be reproduced exactly.
     """
 
-    def __init__(self, clip: BvhClip, names: list[str], scale: float, up: str) -> None:
-        self.clip, self.names, self.scale = clip, names, float(scale)
+    def __init__(self, clip: BvhClip, names: list[str], scale: float, up: str, unwrap: bool) -> None:
+        self.clip, self.names, self.scale, self.unwrap = clip, names, float(scale), unwrap
         self.M = Z_UP_TO_Y_UP.T if up == "y" else np.eye(3)  # file -> gsik world
         self.local_t = bvh_local_translations(clip)
         self.children: list[list[int]] = [[] for _ in clip.joints]
@@ -272,7 +275,8 @@ class _Importer:
 
     def angles(self, dof: str) -> np.ndarray:
         """(F,) the clip's angle of ``dof`` [rad], unwrapped: continuous, without 360-degree jumps."""
-        return np.unwrap(np.radians(self.clip.motion[:, self.dof_columns[dof]]))
+        angles = np.radians(self.clip.motion[:, self.dof_columns[dof]])
+        return np.unwrap(angles) if self.unwrap else angles
 
     # --- limits --------------------------------------------------------------------------
     def set_limits(self, limits: str, margin: float) -> None:
@@ -338,7 +342,10 @@ def _limits(v: np.ndarray, limits: str, margin: float) -> tuple[float, float]:
     """``(lower, upper)`` [rad] of one DOF whose clip values are ``v`` (F,) [rad]."""
     if limits == "from_motion" and v.size:
         return float(v.min()) - margin, float(v.max()) + margin
-    return min(-math.pi, float(v.min(initial=0.0))), max(math.pi, float(v.max(initial=0.0)))
+    lo, hi = float(v.min(initial=0.0)), float(v.max(initial=0.0))
+    if lo < -math.pi or hi > math.pi:  # past half a turn (an unwrapped spin): half a turn of room beyond the clip
+        return lo - math.pi, hi + math.pi
+    return -math.pi, math.pi
 
 
 def skeleton_from_bvh(
