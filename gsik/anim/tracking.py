@@ -2,18 +2,18 @@
 
 The core loop of motion-capture cleanup and retargeting: for each frame of a
 clip take the targets' world poses from the clip's forward kinematics, pin
-the IK root where the clip has it, and let the solver reach them, warm-started
-from the previous frame's answer. By default (``follow_clip=True``) the clip's
-own pose of each frame is the solver's preferred posture (the lowest
-priority, :meth:`gsik.Solver.set_posture`) and frame 0 starts from it: every
-DOF the targets do not need follows the clip (fingers, knees, the spine), and
-the targets only move what they must. ``follow_clip=False`` is the plain
-solver measure: frame 0 from the rest pose, no posture.
+the IK root where the clip has it, and let the solver reach them. By default
+(``follow_clip=True``) the clip's own pose of each frame (DOFs matched by
+name) is where that frame's steps start and the solver's preferred posture
+(the lowest priority, :meth:`gsik.Solver.set_posture`): every DOF the targets
+do not need follows the clip (fingers, knees, the spine), and the targets only
+move what they must. ``follow_clip=False`` is the plain solver measure: frame
+0 from the rest pose, every later frame warm-started from the previous
+frame's answer, no posture.
 
 Targets are any joints or sites of the skeleton; by default the skeleton's
 effector sites are on priority 0 and any other joint or site on priority 1
-(end sites over knees), which ``priorities`` changes per name.
-"""
+(end sites over knees), which ``priorities`` changes per name."""
 
 from __future__ import annotations
 
@@ -169,9 +169,9 @@ def track_clip(
     """Track ``motion`` with ``skeleton``: per frame, solve the clip's target poses, warm-started.
 
     Frame 0 is solved in full (:meth:`Solver.solve`, from ``q0``); every later
-    frame re-pins the root, sets the new targets (and posture) and takes up to
-    ``steps_per_frame`` warm-started :meth:`Solver.step` calls (fewer once
-    converged). Only those solver calls are timed; the errors are measured
+    frame re-pins the root, sets the new targets (with ``follow_clip``: starts
+    from the clip's pose and prefers it) and takes up to ``steps_per_frame``
+    :meth:`Solver.step` calls (fewer once converged). Only those solver calls are timed; the errors are measured
     afterwards by forward kinematics of the solved angles.
 
     Args:
@@ -346,6 +346,10 @@ def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int, reference:
             posture_weight: float, progress):
     """Solve frame 0 in full, then warm-started steps per frame; only the solver calls are timed.
 
+    With a ``reference`` (F, n_dofs), each frame starts from it and keeps it as
+    the posture: what no target needs stays exactly on it, the rest moves only
+    as far as the targets ask.
+
     Returns ``(Q (F, n_dofs) [rad], seconds (F,), steps (F,), statuses)``.
     """
     F = len(clip.targets)
@@ -362,6 +366,8 @@ def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int, reference:
             steps[f] = result.iterations
         else:
             solver.set_world_from_root(clip.world_from_root[f])
+            if reference is not None:
+                solver.set_q(reference[f])
             solver.set_targets(clip.targets[f])
             for k in range(steps_per_frame):
                 result = solver.step()
