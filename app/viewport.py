@@ -29,8 +29,8 @@ import pyvista as pv
 import vtk
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
+from gsik.rotations import quaternion_from_matrix, transform
 from gsik_studio.model import Document, Signal
-from gsik.rotations import quaternion_from_matrix
 
 # Colours (RGB 0-1). Red / green / blue are reserved for targets, effectors and axes.
 AXIS_COLORS = np.array([[0.93, 0.18, 0.16], [0.20, 0.80, 0.22], [0.20, 0.45, 1.00]])
@@ -358,9 +358,8 @@ class Viewport:
     def refresh(self) -> None:
         """Redraw the skeleton, effectors, triads and error lines from the document (no render)."""
         doc = self.doc
-        solver = doc.solver
-        P = solver.world_positions()
-        R = solver.world_rotations()
+        P = doc.world_positions()
+        R = doc.world_rotations()
         self._bones_xyz[:] = P
         self._joints_xyz[:] = P[self._joint_frames]
 
@@ -425,37 +424,41 @@ class Viewport:
         self._syncing = True
         try:
             for name, w in zip(self._sites, self.target_widgets):
-                t = targets.get(name)
-                if t is None or not t.enabled:
-                    if w.GetEnabled():
-                        w.Off()
-                    continue
-                if not w.GetEnabled():
-                    w.On()
-                if not (self._drag_kind == "move" and name == self.selected):  # the dragged one moves itself
-                    w.SetCenter(*t.position)
-                w.GetSphereProperty().SetColor(TARGET_SELECTED_COLOR if name == self.selected else TARGET_COLOR)
+                self._sync_sphere(name, w, targets.get(name))
             t = targets.get(self.selected) if self.selected else None
-            if t is not None and t.enabled:
-                if self._drag_kind != "rotate":  # the box being turned turns itself
-                    tr = vtk.vtkTransform()
-                    M = np.eye(4)
-                    M[:3, :3] = t.rotation
-                    M[:3, 3] = t.position
-                    tr.SetMatrix(M.ravel())
-                    self.box_widget.SetTransform(tr)
-                if not self.box_widget.GetEnabled():
-                    self.box_widget.On()
-                self._label.SetInput(self.selected)
-                self._label.SetPosition(*t.position)
-                self._label.VisibilityOn()
-            else:
-                if self.box_widget.GetEnabled():
-                    self.box_widget.Off()
-                self._label.VisibilityOff()
+            self._sync_box(t if t is not None and t.enabled else None)
         finally:
             self._syncing = False
         self._corner.SetInput(f"IK root: {self.doc.root.replace('_', ' ')}")
+
+    def _sync_sphere(self, name: str, w, t) -> None:
+        """One target's sphere widget: hidden without an enabled target, else at the target."""
+        if t is None or not t.enabled:
+            if w.GetEnabled():
+                w.Off()
+            return
+        if not w.GetEnabled():
+            w.On()
+        if not (self._drag_kind == "move" and name == self.selected):  # the dragged one moves itself
+            w.SetCenter(*t.position)
+        w.GetSphereProperty().SetColor(TARGET_SELECTED_COLOR if name == self.selected else TARGET_COLOR)
+
+    def _sync_box(self, t) -> None:
+        """The rotate box and label on the selected enabled target ``t``; hidden when None."""
+        if t is None:
+            if self.box_widget.GetEnabled():
+                self.box_widget.Off()
+            self._label.VisibilityOff()
+            return
+        if self._drag_kind != "rotate":  # the box being turned turns itself
+            tr = vtk.vtkTransform()
+            tr.SetMatrix(transform(t.rotation, np.array(t.position)).ravel())
+            self.box_widget.SetTransform(tr)
+        if not self.box_widget.GetEnabled():
+            self.box_widget.On()
+        self._label.SetInput(self.selected)
+        self._label.SetPosition(*t.position)
+        self._label.VisibilityOn()
 
     def set_targets_visible(self, visible: bool) -> None:
         """Show or hide every target gizmo (for pictures of the bare pose)."""
@@ -474,7 +477,7 @@ class Viewport:
 
     # -- camera ------------------------------------------------------------------
     def character_bounds(self) -> tuple[float, ...]:
-        P = self.doc.solver.world_positions()
+        P = self.doc.world_positions()
         T = np.array([t.position for t in self.doc.targets.values()] or np.zeros((0, 3))).reshape(-1, 3)
         pts = np.vstack([P, T])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -497,7 +500,7 @@ class Viewport:
     def frame_all(self, margin: float = 0.14) -> None:
         """Fit the character and its targets in the view, keeping the viewing direction."""
         cam = self.plotter.camera
-        P = self.doc.solver.world_positions()
+        P = self.doc.world_positions()
         T = np.array([t.position for t in self.doc.targets.values()]).reshape(-1, 3)
         pts = np.vstack([P, T])
         center = (pts.min(axis=0) + pts.max(axis=0)) / 2

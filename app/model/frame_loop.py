@@ -25,7 +25,7 @@ class LoopEvents:
     """Signals of a :class:`FrameLoop`.
 
     Attributes:
-        frame: A frame changed the pose (redraw the scene).
+        frame: A solver step changed the pose (redraw the scene; playback frames say ``doc.events.pose``).
         readouts: Time to refresh the read-outs (throttled).
         wake: Frames are needed again (start the clock that calls the loop).
         message: ``(text)`` something the user should read (a playback that failed).
@@ -47,14 +47,12 @@ class FrameLoop:
 
     Attributes:
         paused: True stops solving (playback is not paused).
-        app_time: The app's own work in the last solver frame [s] (solver step and scene update, no render).
     """
 
     def __init__(self, doc: Document, readout_interval: float = READOUT_INTERVAL_S):
         self.doc = doc
         self.events = LoopEvents()
         self.paused = False
-        self.app_time = 0.0
         self.readout_interval = readout_interval
         self._frame_times: collections.deque[float] = collections.deque(maxlen=120)
         self._last_readout = float("-inf")
@@ -90,10 +88,8 @@ class FrameLoop:
         if not self.solving:
             self.readouts_now()
             return False
-        t0 = time.perf_counter()
         self.doc.step()
         self.events.frame.emit()
-        self.app_time = time.perf_counter() - t0
         self._frame_done()
         if not self.doc.needs_solving:
             self.readouts_now()
@@ -117,8 +113,7 @@ class FrameLoop:
         if not more:
             self.stop_playback()
             return False
-        self.events.frame.emit()
-        self._frame_done()
+        self._frame_done()  # the document's pose event has redrawn the scene
         return True
 
     def stop_playback(self) -> None:
