@@ -17,18 +17,19 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 import gsik
-from gsik.errors import PoseError, choices
+from gsik.errors import choices
 from gsik.anim.motion import Motion
 from gsik.io.pose import Pose, PoseRead, TargetPose, read_pose, write_pose
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
 from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
 from gsik_studio.model.mirror import mirror_map
+from gsik_studio.model.poses import RootPlacement, check_pose, driven_target, standing_pose, target_at
 
 if TYPE_CHECKING:
     from gsik_studio.model.playback import Playback
@@ -38,39 +39,6 @@ WORLD_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
 #: Solver settings the studio starts with (a frame's budget: a few sweeps).
 DEFAULT_SETTINGS = dict(sweeps=8, damping=1e-3)
-
-
-class RootPlacement(NamedTuple):
-    """Where the IK root stands in the world, as a pose file stores it.
-
-    Attributes:
-        root_position: World position (3,) [m] of the root frame.
-        root_orientation: World orientation of the root frame, unit quaternion (w, x, y, z).
-    """
-
-    root_position: tuple[float, float, float]
-    root_orientation: tuple[float, float, float, float]
-
-    #: World transform (4, 4) of the root frame: the pose file's own formula, so the two never differ.
-    world_from_root = Pose.world_from_root
-
-    @classmethod
-    def from_transform(cls, world_from_root: np.ndarray) -> RootPlacement:
-        W = np.asarray(world_from_root, dtype=float)
-        return cls(tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])))
-
-
-def _target_at(world_from_effector: np.ndarray, like: TargetPose | None = None) -> TargetPose:
-    """A target at a world transform (4, 4), with the flags of ``like`` (defaults when None)."""
-    if like is None:
-        return TargetPose.from_transform(world_from_effector)
-    return TargetPose.from_transform(world_from_effector, like.enabled, like.weight, like.position_only)
-
-
-def _driven_target(t: gsik.Target, old: TargetPose) -> TargetPose:
-    """A playback frame's solver target as a document target (no orientation: keep the old one, position only)."""
-    q = old.orientation if t.orientation is None else tuple(quaternion_from_matrix(t.orientation))
-    return TargetPose(tuple(t.position), q, True, t.weight, t.position_only or t.orientation is None)
 
 
 class Document:
@@ -104,7 +72,7 @@ class Document:
         self._solver_targets: dict[str, tuple[TargetPose, gsik.Target]] = {}
         self._playback: Playback | None = None
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
-        self._restore(self._standing_pose({}))
+        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
 
     # -- read-outs -------------------------------------------------------------
@@ -125,11 +93,6 @@ class Document:
     @property
     def q(self) -> np.ndarray:
         return self.solver.q
-
-    @property
-    def world_from_root(self) -> np.ndarray:
-        """World transform (4, 4) of the IK root (a copy)."""
-        return self._placement.world_from_root
 
     @property
     def dirty(self) -> bool:
@@ -173,30 +136,6 @@ class Document:
         return ((q <= sk.lower + tolerance) | (q >= sk.upper - tolerance)) & (sk.upper > sk.lower)
 
     # -- applying state ----------------------------------------------------------
-    def _standing_pose(self, flags: Mapping[str, TargetPose]) -> Pose:
-        """The skeleton's rest pose on its default root, targets on the effectors."""
-        sk = self.skeleton
-        solver = gsik.Solver(sk)
-        targets = {}
-        for name, T in solver.effector_poses().items():
-            old = flags.get(name)
-            targets[name] = _target_at(T, old) if old is not None else TargetPose.from_transform(
-                T, position_only=name in self.POSITION_ONLY_BY_DEFAULT)
-        placement = RootPlacement.from_transform(solver.world_from_root)
-        return Pose(sk.name, sk.root, *placement, dict(zip(sk.dof_names, sk.rest.tolist())), targets)
-
-    def _check_pose(self, pose: Pose) -> None:
-        sk = self.skeleton
-        if pose.skeleton != sk.name:
-            raise PoseError(f"pose is for skeleton {pose.skeleton!r}, this document's is {sk.name!r}")
-        sk.frame_of(pose.root)
-        missing = [n for n in sk.dof_names if n not in pose.joints]
-        if missing:
-            raise PoseError(f"pose has no angle for {choices(missing)}")
-        effectors = [n for n in sk.effector_sites if n != pose.root]
-        if set(pose.targets) != set(effectors):
-            raise PoseError(f"pose targets {choices(pose.targets)} do not match the effectors {choices(effectors)}")
-
     def _place_root(self, root: str, placement: RootPlacement) -> None:
         """Pin ``root`` at ``placement``: the one place the root's placement is set."""
         if root != self.solver.root:
@@ -206,7 +145,7 @@ class Document:
 
     def _restore(self, pose: Pose) -> None:
         """Make the document show ``pose`` exactly (no command)."""
-        self._check_pose(pose)
+        check_pose(self.skeleton, pose)
         q = np.clip(pose.q(self.skeleton), self.skeleton.lower, self.skeleton.upper)
         self._place_root(pose.root, RootPlacement(pose.root_position, pose.root_orientation))
         self.solver.set_q(q)
@@ -231,7 +170,7 @@ class Document:
 
     def _snapped_targets(self) -> dict[str, TargetPose]:
         """Targets moved onto the achieved effector poses, flags kept."""
-        return {n: _target_at(T, self._targets.get(n)) for n, T in self.solver.effector_poses().items()}
+        return {n: target_at(T, self._targets.get(n)) for n, T in self.solver.effector_poses().items()}
 
     # -- commands --------------------------------------------------------------
     def _interrupt_playback(self) -> None:
@@ -351,7 +290,7 @@ class Document:
     def snap_target(self, name: str) -> None:
         """Move one target onto its effector's achieved pose."""
         t = self._effector(name)
-        self.set_target(name, _target_at(self.solver.effector_poses()[name], t), f"Snap {name}")
+        self.set_target(name, target_at(self.solver.effector_poses()[name], t), f"Snap {name}")
 
     def set_root(self, name: str) -> None:
         """Pin another joint or site (usually the other foot); no joint moves.
@@ -369,7 +308,7 @@ class Document:
             self._place_root(name, RootPlacement.from_transform(self.solver.world_from_root))
             new = {n: t for n, t in self._targets.items() if n != name}
             if old in self.solver.effector_names:
-                new[old] = _target_at(self.solver.effector_poses()[old])
+                new[old] = target_at(self.solver.effector_poses()[old])
             self._targets = {n: new[n] for n in self.solver.effector_names}
             self._push_targets()
 
@@ -377,7 +316,7 @@ class Document:
 
     def set_pose(self, pose: Pose, text: str = "Set pose") -> None:
         """Replace the whole pose (angles, root, targets) as one undo step."""
-        self._check_pose(pose)
+        check_pose(self.skeleton, pose)
         self._edit(text, lambda: self._restore(pose))
 
     def set_angles(self, q, text: str = "Set angles", snap_targets: bool = True) -> None:
@@ -398,7 +337,8 @@ class Document:
 
     def reset(self) -> None:
         """Back to the standing pose on the default root; effector flags are kept."""
-        self.set_pose(self._standing_pose(self._targets), "Reset to standing pose")
+        self.set_pose(standing_pose(self.skeleton, self._targets, self.POSITION_ONLY_BY_DEFAULT),
+                      "Reset to standing pose")
 
     def random_pose(self, seed: int | None = None, amount: float = 0.35) -> None:
         """A random pose: every angle moved from rest by up to ``amount`` of the way to its limits."""
@@ -496,7 +436,7 @@ class Document:
         """The standing pose, no file, empty history."""
         self._interrupt_playback()
         file_state = self._file_state()
-        self._restore(self._standing_pose({}))
+        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
         self.history.clear()
         self.path = None
         self._replaced(file_state)
@@ -541,7 +481,7 @@ class Document:
             if t is None:
                 self._targets[name] = old.replace(enabled=False)
             else:
-                self._targets[name] = t if isinstance(t, TargetPose) else _driven_target(t, old)
+                self._targets[name] = t if isinstance(t, TargetPose) else driven_target(t, old)
         self._push_targets()
         self.step()
         self.events.pose.emit()

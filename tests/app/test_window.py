@@ -296,7 +296,8 @@ def test_screenshot_shows_red_targets_green_effectors_and_axis_colours(qtbot, wi
 def test_joints_on_a_limit_are_highlighted(qtbot, window):
     from vtkmodules.util.numpy_support import vtk_to_numpy
 
-    from gsik_studio.viewport import LIMIT_COLOR, _rgb8
+    from gsik_studio.scene import rgb8 as _rgb8
+    from gsik_studio.viewport import LIMIT_COLOR
 
     sk = window.doc.skeleton
     q = sk.rest.copy()
