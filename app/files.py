@@ -73,10 +73,8 @@ class FileActions:
         try:
             warnings = self.doc.open(path)
         except gsik.GsikError as exc:
-            self._message(f"Could not open {os.path.basename(path)}: {exc}", 10000)
-            QtWidgets.QMessageBox.critical(self.parent, "Could not open pose",
-                                           f"The pose file could not be opened; nothing was changed.\n\n{exc}")
-            return False
+            return self._failed(f"Could not open {os.path.basename(path)}: {exc}", "Could not open pose",
+                                f"The pose file could not be opened; nothing was changed.\n\n{exc}")
         self.add_recent(path)
         if warnings:
             self._message(f"Opened {os.path.basename(path)} with {len(warnings)} warning(s)", 10000)
@@ -106,13 +104,17 @@ class FileActions:
         try:
             self.doc.save(path)
         except gsik.GsikError as exc:
-            self._message(f"Could not save: {exc}", 10000)
-            QtWidgets.QMessageBox.critical(self.parent, "Could not save pose",
-                                           f"The pose was not saved (any existing file is unchanged).\n\n{exc}")
-            return False
+            return self._failed(f"Could not save: {exc}", "Could not save pose",
+                                f"The pose was not saved (any existing file is unchanged).\n\n{exc}")
         self.add_recent(path)
         self._message(f"Saved {path}", 5000)
         return True
+
+    def _failed(self, status: str, title: str, text: str) -> bool:
+        """Say why a file command failed, on the status bar and in a box; returns False."""
+        self._message(status, 10000)
+        QtWidgets.QMessageBox.critical(self.parent, title, text)
+        return False
 
     def recent_files(self) -> list[str]:
         value = self.settings.value("recent_files", [])

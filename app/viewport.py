@@ -87,14 +87,13 @@ class Viewport:
 
     Attributes:
         selection_changed: Signal(name or None) when a target is selected.
-        drag_started / drag_finished: Signal(name) around a gizmo drag.
+        drag_finished: Signal(name) when a target gizmo drag ends.
     """
 
     def __init__(self, plotter: pv.Plotter, doc: Document):
         self.plotter = plotter
         self.doc = doc
         self.selection_changed = Signal()
-        self.drag_started = Signal()
         self.drag_finished = Signal()
         self.selected: str | None = None
         self._drag_counter = itertools.count(1)
@@ -262,7 +261,6 @@ class Viewport:
         self._drag = next(self._drag_counter)
         self._drag_kind = "move"
         self.select(name)
-        self.drag_started.emit(name)
 
     def _on_drag_move(self, name: str, widget) -> None:
         if self._syncing or name not in self.doc.targets:
