@@ -25,16 +25,14 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik import validate
-from gsik.errors import SkeletonError, SolverError, choices
+from gsik.errors import SolverError
 from gsik.kinematics import world_frames
 from gsik.anim.motion import Motion
-from gsik.rotations import transform
 from gsik.skeleton import Skeleton
 from gsik.solver import Solver, Status
-from gsik.targets import Target
+from gsik.anim.track_targets import (JOINT_PRIORITY, ClipTargets, TargetPlan, clip_frame, clip_posture,
+                                     clip_targets, effector_pairs, position_only_flags, priority_levels)
 
-#: Priority of targets on joints or sites that are not effectors (knees under the end sites).
-JOINT_PRIORITY = 1
 
 
 class TrackSummary(NamedTuple):
@@ -141,15 +139,6 @@ class BodyError(NamedTuple):
     tracked: bool
 
 
-def _clip_frame(clip_skeleton: Skeleton, name: str, what: str) -> int:
-    try:
-        return clip_skeleton.frame_of(name)
-    except SkeletonError:
-        raise SolverError(f"the clip's skeleton {clip_skeleton.name!r} has no joint or site {name!r} for {what}; "
-                          f"joints: {choices(clip_skeleton.joint_names)}; sites: {choices(clip_skeleton.site_names)}"
-                          ) from None
-
-
 def track_clip(
     skeleton: Skeleton,
     motion: Motion,
@@ -208,14 +197,14 @@ def track_clip(
     _check_inputs(skeleton, motion, steps_per_frame)
     root = skeleton.root if root is None else root
     skeleton.frame_of(root)
-    root_in_clip = _clip_frame(motion.skeleton, root, "the root")
-    pairs = _effector_pairs(skeleton, motion.skeleton, effectors, root)
+    root_in_clip = clip_frame(motion.skeleton, root, "the root")
+    pairs = effector_pairs(skeleton, motion.skeleton, effectors, root)
     names = tuple(pairs)
-    clip_frames = [_clip_frame(motion.skeleton, pairs[n], f"effector {n!r}") for n in names]
-    plan = _TargetPlan(names, clip_frames, _position_only(names, position_only),
-                       _priorities(skeleton, names, priorities))
-    clip = _clip_targets(motion, root_in_clip, plan)
-    reference = _clip_posture(skeleton, motion) if follow_clip else None
+    clip_frames = [clip_frame(motion.skeleton, pairs[n], f"effector {n!r}") for n in names]
+    plan = TargetPlan(names, clip_frames, position_only_flags(names, position_only),
+                       priority_levels(skeleton, names, priorities))
+    clip = clip_targets(motion, root_in_clip, plan)
+    reference = clip_posture(skeleton, motion) if follow_clip else None
     if q0 is None and reference is not None:
         q0 = reference[0]
     solver = Solver(skeleton.with_root(root), q0=q0, world_from_root=clip.world_from_root[0], sweeps=sweeps,
@@ -242,113 +231,9 @@ def _check_inputs(skeleton: Skeleton, motion: Motion, steps_per_frame: int) -> N
         raise SolverError("cannot track a clip with no frames")
 
 
-def _effector_pairs(skeleton: Skeleton, clip_sk: Skeleton, effectors, root: str) -> dict[str, str]:
-    """``{joint or site of skeleton: clip joint or site it follows}``, the root left out (it is pinned)."""
-    available = [n for n in skeleton.effector_sites if n != root]
-    pairs = _requested_pairs(clip_sk, effectors, available)
-    pairs.pop(root, None)  # pinned where the clip has it: tracked exactly
-    allowed = set(skeleton.joint_names) | set(skeleton.site_names)
-    for name in pairs:
-        if name not in allowed:
-            others = [n for n in [*skeleton.joint_names, *skeleton.site_names] if n not in available and n != root]
-            raise SolverError(f"{name!r} is not an effector of skeleton {skeleton.name!r}; "
-                              f"effectors: {choices(available)}; other joints and sites: {choices(others)}")
-    return pairs
-
-
-def _requested_pairs(clip_sk: Skeleton, effectors, available: list[str]) -> dict[str, str]:
-    """The pairs as asked: a mapping, names (or one name) followed by the same name, or every shared effector."""
-    if isinstance(effectors, Mapping):
-        return dict(effectors)
-    if effectors is not None:
-        return {n: n for n in ([effectors] if isinstance(effectors, str) else effectors)}
-    in_clip = set(clip_sk.site_names) | set(clip_sk.joint_names)
-    pairs = {n: n for n in available if n in in_clip}
-    if not pairs:
-        raise SolverError(f"the clip has none of the skeleton's effectors {choices(available)}; "
-                          "name them with effectors={effector: clip name}")
-    return pairs
-
-
-def _position_only(names: tuple[str, ...], position_only) -> tuple[bool, ...]:
-    """Per target: position only?"""
-    if isinstance(position_only, (bool, np.bool_)):
-        return (bool(position_only),) * len(names)
-    chosen = [position_only] if isinstance(position_only, str) else list(position_only)
-    unknown = [n for n in chosen if n not in names]
-    if unknown:
-        raise SolverError(f"position_only names {unknown[0]!r}, which is not tracked; targets: {choices(names)}")
-    return tuple(n in chosen for n in names)
-
-
-def _priorities(skeleton: Skeleton, names: tuple[str, ...], priorities) -> tuple[int, ...]:
-    """Per target: its level, as asked or by default (effector sites 0, other joints and sites 1)."""
-    priorities = dict(priorities or {})
-    unknown = [n for n in priorities if n not in names]
-    if unknown:
-        raise SolverError(f"priorities name {unknown[0]!r}, which is not tracked; targets: {choices(names)}")
-    effectors = set(skeleton.effector_sites)
-    out = []
-    for n in names:
-        level = priorities.get(n, 0 if n in effectors else JOINT_PRIORITY)
-        validate.whole(level, f"priority of {n!r}", SolverError, 0)
-        out.append(int(level))
-    return tuple(out)
-
-
-class _TargetPlan(NamedTuple):
-    """The targets: names, the clip frame each follows, position only?, priority level."""
-
-    names: tuple[str, ...]
-    clip_frames: list[int]
-    position_only: tuple[bool, ...]
-    priorities: tuple[int, ...]
-
-
-class _ClipTargets(NamedTuple):
-    """What the clip asks for, per frame: root pose (F, 4, 4), targets, their positions (F, m, 3) [m] and
-    orientations (F, m, 3, 3)."""
-
-    world_from_root: np.ndarray
-    targets: list[dict[str, Target]]
-    positions: np.ndarray
-    rotations: np.ndarray
-
-
-def _clip_targets(motion: Motion, root_in_clip: int, plan: _TargetPlan) -> _ClipTargets:
-    """Targets and root poses from the clip's own forward kinematics."""
-    F = motion.n_frames
-    W = np.empty((F, 4, 4))
-    targets: list[dict[str, Target]] = []
-    target_p = np.empty((F, len(plan.names), 3))
-    target_R = np.empty((F, len(plan.names), 3, 3))
-    for f in range(F):
-        R, p = motion.frames(f)
-        W[f] = transform(R[root_in_clip], p[root_in_clip])
-        target_p[f] = p[plan.clip_frames]
-        target_R[f] = R[plan.clip_frames]
-        targets.append({n: Target(p[c], None if only else R[c], priority=level)
-                        for n, c, only, level in zip(*plan)})
-    return _ClipTargets(W, targets, target_p, target_R)
-
-
-def _clip_posture(skeleton: Skeleton, motion: Motion) -> np.ndarray:
-    """(F, n_dofs) the clip's angles on ``skeleton``, DOFs matched by name (the rest pose where the clip has none)."""
-    ref = np.tile(skeleton.rest, (motion.n_frames, 1))
-    clip_dofs = motion.skeleton.dof_names
-    for d, name in enumerate(skeleton.dof_names):
-        if name in clip_dofs:
-            ref[:, d] = motion.q[:, motion.skeleton.dof_index(name)]
-    return np.clip(ref, skeleton.lower, skeleton.upper)
-
-
-def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int, reference: np.ndarray | None,
+def _follow(solver: Solver, clip: ClipTargets, steps_per_frame: int, reference: np.ndarray | None,
             posture_weight: float, progress):
-    """Solve frame 0 in full, then warm-started steps per frame; only the solver calls are timed.
-
-    With a ``reference`` (F, n_dofs), each frame starts from it and keeps it as
-    the posture: what no target needs stays exactly on it, the rest moves only
-    as far as the targets ask.
+    """Solve frame 0 in full, then steps per frame; only the solver calls are timed.
 
     Returns ``(Q (F, n_dofs) [rad], seconds (F,), steps (F,), statuses)``.
     """
@@ -359,30 +244,59 @@ def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int, reference:
     statuses: list[Status] = []
     for f in range(F):
         start = time.perf_counter()
-        if reference is not None:
-            solver.set_posture(reference[f], posture_weight)
         if f == 0:
-            result = solver.solve(clip.targets[0])
-            steps[f] = result.iterations
-        else:
-            solver.set_world_from_root(clip.world_from_root[f])
             if reference is not None:
-                solver.set_q(reference[f])
-            solver.set_targets(clip.targets[f])
-            for k in range(steps_per_frame):
-                result = solver.step()
-                steps[f] = k + 1
-                if result.converged:
-                    break
+                solver.set_posture(reference[0], posture_weight)
+            result = solver.solve(clip.targets[0])
+            Q[f], status, steps[f] = result.q, result.status, result.iterations
+        else:
+            Q[f], status, steps[f] = _frame(solver, clip, f, reference, posture_weight, steps_per_frame)
         seconds[f] = time.perf_counter() - start
-        Q[f] = result.q
-        statuses.append(result.status)
+        statuses.append(status)
         if progress is not None:
             progress(f + 1, F)
     return Q, seconds, steps, statuses
 
 
-def _measure(skeleton: Skeleton, root: str, Q: np.ndarray, clip: _ClipTargets, motion: Motion, plan: _TargetPlan):
+def _frame(solver: Solver, clip: ClipTargets, f: int, reference: np.ndarray | None, posture_weight: float,
+           steps_per_frame: int) -> tuple[np.ndarray, Status, int]:
+    """One later frame: ``(q (n_dofs,) [rad], status, steps taken)``.
+
+    With a ``reference`` (F, n_dofs) the frame starts from it and keeps it as
+    the posture: what no target needs stays exactly on it, the rest moves only
+    as far as the targets ask; where it already meets every target no step is
+    taken. Without, the steps are warm-started from the previous frame.
+    """
+    solver.set_world_from_root(clip.world_from_root[f])
+    if reference is not None:
+        solver.set_q(reference[f])
+        if _meets(solver, clip.targets[f]):
+            return solver.q, Status.CONVERGED, 0
+        solver.set_posture(reference[f], posture_weight)
+    solver.set_targets(clip.targets[f])
+    for k in range(steps_per_frame):
+        result = solver.step()
+        if result.converged:
+            break
+    return result.q, result.status, k + 1
+
+
+def _meets(solver: Solver, targets: dict) -> bool:
+    """True when the solver's current pose is within its tolerances of every target."""
+    s = solver.settings
+    p, R = solver.world_positions(), solver.world_rotations()
+    for name, t in targets.items():
+        i = solver.skeleton.frame_of(name)
+        if np.linalg.norm(p[i] - t.position) > s.position_tolerance:
+            return False
+        if t.uses_orientation:
+            cos = 0.5 * (np.trace(R[i].T @ t.orientation) - 1.0)
+            if np.arccos(np.clip(cos, -1.0, 1.0)) > s.orientation_tolerance:
+                return False
+    return True
+
+
+def _measure(skeleton: Skeleton, root: str, Q: np.ndarray, clip: ClipTargets, motion: Motion, plan: TargetPlan):
     """By forward kinematics of the solved angles: the targets' distances (F, m) [m] and angles (F, m) [rad],
     then every shared joint and site's name, distance to the clip (F, k) [m] and the clip's height [m]."""
     F, m = clip.positions.shape[:2]

@@ -107,7 +107,7 @@ def _priority_map(values) -> dict[str, int]:
 
 
 def _write_output(args: argparse.Namespace, path: str, imported, motion) -> None:
-    """The solved motion in the input's conventions, or gsik's export when ``--units`` or ``--up`` ask to change them."""
+    """The solved motion in the input's conventions, or gsik's export when ``--units`` or ``--up`` change them."""
     file_units = {1.0: "m", 0.01: "cm"}.get(imported.scale)
     keep = (args.units in (None, file_units)) and (args.up in (None, imported.up))
     if keep:
