@@ -129,9 +129,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_scenarios)
 
     p = add("track", "track a BVH clip (or a folder of clips) frame by frame; report every joint's error",
-            "Import a BVH clip as a skeleton and motion, then solve its targets frame by frame, warm-started "
-            "(motion-capture cleanup's core loop). By default the clip's own pose of each frame is the preferred "
-            "posture, so every joint the targets do not need follows the clip, and the output keeps the input's "
+            "Import a BVH clip as a skeleton and motion, then solve its targets frame by frame (motion-capture "
+            "cleanup's core loop). By default each frame starts from the clip's own pose and prefers it (the "
+            "lowest priority), so every joint the targets do not need follows the clip, and the output keeps the "
+            "input's "
             "conventions (names, End Sites, channels, root OFFSET, units, up axis, frame time). Prints the "
             "targets' errors, every joint's error against the clip and the time per frame. CLIP may be a folder: "
             "its clips are tracked in parallel worker processes (--out names a folder then) with one summary "

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import NamedTuple, TextIO
@@ -43,7 +44,7 @@ def cmd_track(args: argparse.Namespace, out: TextIO) -> int:
 
 
 class _Run(NamedTuple):
-    """What one track made: the clip, its import and the result."""
+    """What one track made: the clip (BvhClip), its import (BvhImport) and the result (TrackResult)."""
 
     clip: object
     imported: object
@@ -195,8 +196,6 @@ def _track_folder(args: argparse.Namespace, out: TextIO) -> int:
 
 def track_one(args: argparse.Namespace, path: str, out_path: str | None) -> TrackRow:
     """Track one clip of a folder (in a worker process); its summary row, or the error that stopped it."""
-    import time
-
     start = time.perf_counter()
     try:
         clip, imported, result = _track(args, path, out_path)
