@@ -142,6 +142,7 @@ class Controller:
         self._e = np.zeros(6 * m)
         self._err = np.zeros((2, m))
         self._M = np.zeros((3, 3))
+        self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
         if balance is not None:
             self._mass_topo = topology(skeleton, skeleton.root, [skeleton.frame_names[f] for f in balance.mass.body_frame])
             self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
@@ -235,11 +236,13 @@ class Controller:
         ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
         """
         s = self._settings
-        state0 = self._level_state(q, R, p)
+        cached = self._state_cache
+        fresh = cached is not None and np.array_equal(cached[0], q) and np.array_equal(cached[1], W)
+        state0 = cached[2] if fresh else self._level_state(q, R, p)
         damping = lam[0] if s.adaptive_damping else s.damping
         dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), self._dampings(damping))
         for tries in range(4):
-            verdict, q2, R2, p2 = self._trial(q, q + dq, W, state0, damping)
+            verdict, q2, R2, p2, state = self._trial(q, q + dq, W, state0, damping)
             if verdict != "worse" or not s.adaptive_damping:
                 break
             dq = 0.5 * dq
@@ -247,6 +250,7 @@ class Controller:
         if accepted:
             step_norm = float(np.linalg.norm(q2 - q))
             q[:], R[:], p[:] = q2, R2, p2
+            self._state_cache = (q.copy(), W.copy(), state)
             if s.adaptive_damping:
                 lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
         else:
@@ -254,7 +258,8 @@ class Controller:
             if verdict == "worse":
                 lam[0] = min(damping * 10.0, 1e6)
         held = s.adaptive_damping and (verdict == "same" or (accepted and step_norm <= s.stall_tolerance))
-        return ControlStats(accepted, held, self.converged(R, p), self.target_cost(R, p), step_norm)
+        converged, cost = self._summary(R, p)
+        return ControlStats(accepted, held, converged, cost, step_norm)
 
     def _dampings(self, lam: float) -> np.ndarray:
         """Damping per level: the adaptive one for the targets and balance, the fixed one for the
@@ -274,7 +279,7 @@ class Controller:
         return np.minimum(lo, 0.0), np.maximum(hi, 0.0)
 
     def _trial(self, q, q_try, W, state0, damping):
-        """``(verdict, q, R, p)`` of a trial pose. When a lower level's move breaks a met higher level
+        """``(verdict, q, R, p, level state)`` of a trial pose. When a lower level's move breaks a met higher level
         (the null space is only flat to first order), up to :data:`RESTORING_STEPS` restoring steps of the target levels
         from the trial pose brings it back onto them, and that pose is judged instead."""
         sk = self._sk
@@ -284,16 +289,26 @@ class Controller:
         state = self._level_state(q2, R2, p2)
         verdict = _compare(state0, state, self._settings.settle_tolerance)
         if verdict != "worse" or self._posture is None:
-            return verdict, q2, R2, p2
+            return verdict, q2, R2, p2, state
         q3, R3, p3 = q2.copy(), R2.copy(), p2.copy()
         for _ in range(RESTORING_STEPS):
             levels = self.levels(q3, R3, p3)[:-1]
             q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), damping), sk.lower, sk.upper)
             self._frames(q3, W, R3, p3)
-            restored = _compare(state0, self._level_state(q3, R3, p3), self._settings.settle_tolerance)
+            state3 = self._level_state(q3, R3, p3)
+            restored = _compare(state0, state3, self._settings.settle_tolerance)
             if restored != "worse":
-                return restored, q3, R3, p3
-        return verdict, q2, R2, p2
+                return restored, q3, R3, p3, state3
+        return verdict, q2, R2, p2, state
+
+    def _summary(self, R, p) -> tuple[bool, float]:
+        """``(converged, target cost)`` at frames ``R``, ``p``, from one error evaluation."""
+        s = self._settings
+        self._task_errors(R, p)
+        w = self._row_w
+        missed = ((w[:, 0] > 0.0) & (self._err[0] > s.position_tolerance)) | \
+                 ((w[:, 3] > 0.0) & (self._err[1] > s.orientation_tolerance))
+        return not bool(missed.any()), float(0.5 * (w * self._e.reshape(-1, 6) ** 2).sum())
 
     def target_cost(self, R, p) -> float:
         """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
