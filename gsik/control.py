@@ -122,14 +122,13 @@ class Controller:
         self._posture = posture
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
-        order = sorted(range(len(tasks)), key=lambda k: tasks[k].priority)
-        self._tasks = [tasks[k] for k in order]
+        self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
+        self._tasks = _ordered(tasks)
+        self.key = structure(skeleton, tasks, posture, balance, settings)
         names = [t.name for t in self._tasks]
         self.names = tuple(names)
         self._topo = topology(skeleton, skeleton.root, names)
-        self._tp = np.array([t.position for t in self._tasks]).reshape(-1, 3)
-        self._tR = np.array([t.rotation for t in self._tasks]).reshape(-1, 3, 3)
-        self._row_w = np.array([t.row_weight for t in self._tasks]).reshape(-1, 6)
+        self.retarget(tasks)
         priorities = [t.priority for t in self._tasks]
         if balance is not None:
             priorities.append(BALANCE_PRIORITY)
@@ -142,10 +141,17 @@ class Controller:
         self._e = np.zeros(6 * m)
         self._err = np.zeros((2, m))
         self._M = np.zeros((3, 3))
-        self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
         if balance is not None:
             self._mass_topo = topology(skeleton, skeleton.root, [skeleton.frame_names[f] for f in balance.mass.body_frame])
             self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
+
+    def retarget(self, tasks) -> None:
+        """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
+        ordered = _ordered(tasks)
+        self._tp = np.array([t.position for t in ordered]).reshape(-1, 3)
+        self._tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
+        self._row_w = np.array([t.row_weight for t in ordered]).reshape(-1, 6)
+        self._state_cache = None
 
     # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -336,6 +342,17 @@ def _forward_kinematics(skeleton, q, root_frame, W, R, p) -> None:
     """World frames into ``R``, ``p`` at ``q``, frame ``root_frame`` pinned at ``W``."""
     _kernels.forward_kinematics(skeleton.frame_parent, skeleton.frame_offset, skeleton.frame_rotation,
                                 skeleton.frame_axis, skeleton.frame_dof, q, root_frame, W, R, p)
+
+
+def _ordered(tasks) -> list[FrameTask]:
+    """Tasks by priority, then name: one order for building and retargeting."""
+    return sorted(tasks, key=lambda t: (t.priority, t.name))
+
+
+def structure(skeleton, tasks, posture, balance, settings) -> tuple:
+    """What a :class:`Controller` is built for, apart from the target values: equal keys can retarget."""
+    feet = None if balance is None else balance.feet
+    return (skeleton.root, tuple((t.name, t.priority) for t in _ordered(tasks)), id(posture), feet, id(settings))
 
 
 def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]:

@@ -260,7 +260,8 @@ class Solver:
         self._targets: dict[str, Target] = {}
         self._posture: control.Posture | None = None
         self._balance = False
-        self._controller: control.Controller | None = None
+        self._controller: control.Controller | None = None  # None: to be made (or retargeted) before use
+        self._last_controller: control.Controller | None = None
         self._args = None
         self._solve_vector_for = None
         self._x = np.zeros(skeleton.n_dofs)
@@ -689,11 +690,17 @@ class Solver:
         return len(levels) > 1 or any(n not in self._topo.effector_names for n in self._targets)
 
     def _make_controller(self) -> control.Controller:
+        """The controller for the current targets: the last one retargeted if only their values changed."""
         if self._controller is None:
             sk = self._skeleton
             tasks = control.frame_tasks(sk, self._targets, self._settings.orientation_weight)
             balance = control.support(sk, self._targets, self._p) if self._balance else None
-            self._controller = control.Controller(sk, tasks, self._posture, balance, self._settings)
+            last = self._last_controller
+            if last is not None and last.key == control.structure(sk, tasks, self._posture, balance, self._settings):
+                last.retarget(tasks)
+            else:
+                last = control.Controller(sk, tasks, self._posture, balance, self._settings)
+            self._controller = self._last_controller = last
         return self._controller
 
     def _control_step(self) -> SolveResult:
