@@ -128,6 +128,8 @@ class Controller:
         names = [t.name for t in self._tasks]
         self.names = tuple(names)
         self._topo = topology(skeleton, skeleton.root, names)
+        self._task_model = _kinematics(skeleton, self._topo)
+        self._fk_model = _kinematics(skeleton)
         self.retarget(tasks)
         priorities = [t.priority for t in self._tasks]
         if balance is not None:
@@ -142,7 +144,8 @@ class Controller:
         self._err = np.zeros((2, m))
         self._M = np.zeros((3, 3))
         if balance is not None:
-            self._mass_topo = topology(skeleton, skeleton.root, [skeleton.frame_names[f] for f in balance.mass.body_frame])
+            bodies = [skeleton.frame_names[f] for f in balance.mass.body_frame]
+            self._mass_kinematics = _kinematics(skeleton, topology(skeleton, skeleton.root, bodies))
             self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
 
     def retarget(self, tasks) -> None:
@@ -211,7 +214,7 @@ class Controller:
     def levels(self, q, R, p) -> list[Level]:
         """The linearised levels at ``q`` (frames ``R``, ``p``), in priority order, the posture last."""
         self._task_errors(R, p)
-        _jacobian(self._sk, self._topo, R, p, self._J)
+        _jacobian(self._task_model, R, p, self._J)
         rows = np.repeat(self._task_level, 6)
         weights = self._row_w.reshape(-1)
         out = []
@@ -230,8 +233,7 @@ class Controller:
         n = self._sk.n_dofs
         if signed_distance(goal, com[:2]) <= -BALANCE_BAND:
             return Level(np.zeros((0, n)), np.zeros(0), np.zeros(0))
-        t = self._mass_topo
-        _jacobian(self._sk, t, R, p, self._Jm)
+        _jacobian(self._mass_kinematics, R, p, self._Jm)
         Jc = com_jacobian(self._balance.mass, R, self._Jm)
         return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
 
@@ -328,18 +330,25 @@ class Controller:
         return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
 
     def _frames(self, q, W, R, p) -> None:
-        _forward_kinematics(self._sk, q, self._root, W, R, p)
+        _forward_kinematics(self._fk_model, q, self._root, W, R, p)
 
 
 # -- the kernels, in one place ------------------------------------------------------------------
-def _jacobian(skeleton, topo, R, p, J) -> None:
-    """Fill ``J`` (6 m, n_dofs) for the frames of ``topo`` (a :class:`gsik.kinematics.Topology`)."""
+def _kinematics(skeleton, topo=None):
+    """What :func:`_jacobian` (the frames of ``topo``) and :func:`_forward_kinematics` (no ``topo``) take."""
+    return skeleton, topo
+
+
+def _jacobian(model, R, p, J) -> None:
+    """Fill ``J`` (6 m, n_dofs) for the frames of the model's topology."""
+    skeleton, topo = model
     _kernels.jacobian(R, p, skeleton.frame_axis, skeleton.dof_frame, topo.effector_frame, topo.sign,
                       topo.effector_dofs, topo.effector_dof_count, J)
 
 
-def _forward_kinematics(skeleton, q, root_frame, W, R, p) -> None:
+def _forward_kinematics(model, q, root_frame, W, R, p) -> None:
     """World frames into ``R``, ``p`` at ``q``, frame ``root_frame`` pinned at ``W``."""
+    skeleton = model[0]
     _kernels.forward_kinematics(skeleton.frame_parent, skeleton.frame_offset, skeleton.frame_rotation,
                                 skeleton.frame_axis, skeleton.frame_dof, q, root_frame, W, R, p)
 
