@@ -1,7 +1,9 @@
 """The document of gsik-studio: skeleton, solver, targets, undo history, file.
 
-Plain Python: no Qt, no PyVista. The window and the viewport draw a
-:class:`Document` and forward input to it; tests drive it without a display.
+Plain Python: no Qt, no PyVista. The :class:`Document` is the app's only door
+to the solver: the window and the viewport read typed read-outs from it
+(:meth:`Document.world_positions`, :attr:`Document.targets`, ...) and forward
+input to its commands; it says what changed through :attr:`Document.events`.
 
 Every edit is a command on the :class:`History`. A command keeps the
 complete :class:`gsik.io.pose.Pose` from before the edit; when it is undone it
@@ -15,150 +17,28 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 import gsik
-from gsik.errors import PoseError, choices
+from gsik.errors import choices
 from gsik.anim.motion import Motion
 from gsik.io.pose import Pose, PoseRead, TargetPose, read_pose, write_pose
-from gsik.rotations import matrix_from_axis_angle, matrix_from_quaternion, quaternion_from_matrix, transform
+from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
+from gsik_studio.model.events import DocumentEvents, Signal
+from gsik_studio.model.history import Command, History
+from gsik_studio.model.mirror import mirror_map
+from gsik_studio.model.poses import RootPlacement, check_pose, driven_target, standing_pose, target_at
+
+if TYPE_CHECKING:
+    from gsik_studio.model.playback import Playback
 
 #: Axis names of the world, for rotating a target about one of them.
 WORLD_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
 #: Solver settings the studio starts with (a frame's budget: a few sweeps).
 DEFAULT_SETTINGS = dict(sweeps=8, damping=1e-3)
-
-
-class Signal:
-    """A minimal observer list: ``connect(fn)``, ``emit(*args)``."""
-
-    def __init__(self):
-        self._slots: list[Callable] = []
-
-    def connect(self, slot: Callable) -> None:
-        self._slots.append(slot)
-
-    def disconnect(self, slot: Callable) -> None:
-        self._slots.remove(slot)
-
-    def emit(self, *args) -> None:
-        for slot in list(self._slots):
-            slot(*args)
-
-
-@dataclass(eq=False)
-class Command:
-    """One undoable edit.
-
-    Attributes:
-        text: What the edit did, for menus ("Move left_hand").
-        before: The document's pose before the edit.
-        after: The pose to restore on redo; set when the command is undone.
-        merge_key: Consecutive commands with the same non-None key merge
-            into one (every mouse move of one drag is one command).
-    """
-
-    text: str
-    before: Pose
-    after: Pose | None = None
-    merge_key: object | None = None
-
-
-@dataclass(eq=False)
-class History:
-    """An undo stack: ``commands[:index]`` are done, the rest undone (redoable)."""
-
-    limit: int = 500
-    commands: list[Command] = field(default_factory=list)
-    index: int = 0
-    clean_index: int | None = 0
-
-    @property
-    def can_undo(self) -> bool:
-        return self.index > 0
-
-    @property
-    def can_redo(self) -> bool:
-        return self.index < len(self.commands)
-
-    @property
-    def undo_text(self) -> str:
-        return self.commands[self.index - 1].text if self.can_undo else ""
-
-    @property
-    def redo_text(self) -> str:
-        return self.commands[self.index].text if self.can_redo else ""
-
-    @property
-    def is_clean(self) -> bool:
-        return self.index == self.clean_index
-
-    def push(self, command: Command) -> bool:
-        """Add a done command; returns False when it merged into the previous one."""
-        del self.commands[self.index:]
-        if self.clean_index is not None and self.clean_index > self.index:
-            self.clean_index = None  # the saved state can no longer be reached
-        top = self.commands[-1] if self.commands else None
-        if top is not None and command.merge_key is not None and top.merge_key == command.merge_key:
-            if self.clean_index == self.index:
-                self.clean_index = None
-            return False
-        self.commands.append(command)
-        if len(self.commands) > self.limit:
-            del self.commands[0]
-            self.clean_index = None if self.clean_index in (None, 0) else self.clean_index - 1
-        self.index = len(self.commands)
-        return True
-
-    def would_merge(self, merge_key: object | None) -> bool:
-        """True if a command with ``merge_key`` would merge into the current top."""
-        return (merge_key is not None and self.index == len(self.commands) and bool(self.commands)
-                and self.commands[-1].merge_key == merge_key)
-
-    def end_merge(self) -> None:
-        """The next command does not merge into the current top (a drag ended)."""
-        if self.commands:
-            self.commands[-1].merge_key = None
-
-    def set_clean(self) -> None:
-        self.clean_index = self.index
-
-    def clear(self) -> None:
-        self.commands.clear()
-        self.index = 0
-        self.clean_index = 0
-
-
-def mirror_map(skeleton: gsik.Skeleton, source: str) -> list[tuple[int, int, float]]:
-    """``(from_dof, to_dof, sign)`` copying the ``source`` side's angles to the other side.
-
-    The two sides are mirror images in the plane x = 0 (the biped's sagittal
-    plane). Reflecting a rotation about axis ``a`` gives the rotation about
-    ``-M a`` by the same angle (``M`` = diag(-1, 1, 1)), so a pitch (x) keeps
-    its sign and a roll (y) or twist (z) changes it. DOFs whose counterpart
-    has an axis that is not the mirror image are skipped.
-    """
-    if source not in ("left", "right"):
-        raise ValueError(f"mirror source must be 'left' or 'right', got {source!r}")
-    other = "right" if source == "left" else "left"
-    M = np.diag([-1.0, 1.0, 1.0])
-    out = []
-    for i, name in enumerate(skeleton.dof_names):
-        if not name.startswith(source + "_"):
-            continue
-        twin = other + name[len(source):]
-        if twin not in skeleton.dof_names:
-            continue
-        j = skeleton.dof_names.index(twin)
-        a = -M @ skeleton.frame_axis[skeleton.dof_frame[i]]
-        b = skeleton.frame_axis[skeleton.dof_frame[j]]
-        d = float(a @ b)
-        if abs(abs(d) - 1.0) < 1e-6:
-            out.append((i, j, 1.0 if d > 0 else -1.0))
-    return out
 
 
 class Document:
@@ -168,11 +48,11 @@ class Document:
         skeleton: A :class:`gsik.Skeleton` or the name of a bundled one.
         settings: Solver settings overriding :data:`DEFAULT_SETTINGS`.
 
-    Signals (plain callbacks, see :class:`Signal`):
-        changed(kind): ``"pose"`` (angles, root or targets replaced),
-            ``"targets"`` (a target moved or turned), ``"options"`` (a target's
-            enabled / weight / position-only changed), ``"settings"``, ``"file"``
-            (path or dirty flag), ``"history"``.
+    Attributes:
+        events: What changed (see :class:`gsik_studio.model.events.DocumentEvents`).
+        last_result: The last solver step's result (None after the pose was replaced).
+        last_solve_time: How long the last solver step took [s].
+        needs_solving: True while more solver steps would move the pose.
     """
 
     #: Effectors whose targets start position-only: the biped's arms have no
@@ -184,20 +64,18 @@ class Document:
         self.solver = gsik.Solver(self.skeleton, **{**DEFAULT_SETTINGS, **settings})
         self.history = History()
         self.path: str | None = None
-        self.changed = Signal()
+        self.events = DocumentEvents()
         self.last_result: gsik.SolveResult | None = None
         self.last_solve_time = 0.0  # [s]
         self.needs_solving = True
         self._targets: dict[str, TargetPose] = {}
         self._solver_targets: dict[str, tuple[TargetPose, gsik.Target]] = {}
         self._playback: Playback | None = None
-        self._root_position = (0.0, 0.0, 0.0)
-        self._root_orientation = (1.0, 0.0, 0.0, 0.0)
-        self._initial = self._standing_pose({})
-        self._restore(self._initial)
+        self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
 
-    # -- state -----------------------------------------------------------------
+    # -- read-outs -------------------------------------------------------------
     @property
     def root(self) -> str:
         return self.solver.root
@@ -225,15 +103,31 @@ class Document:
     def title(self) -> str:
         return os.path.basename(self.path) if self.path else "Untitled"
 
+    @property
+    def settings(self) -> gsik.SolverSettings:
+        return self.solver.settings
+
     def pose(self) -> Pose:
         """A complete snapshot of the document (what a pose file holds)."""
-        q = self.solver.q
-        return Pose(self.skeleton.name, self.solver.root, self._root_position, self._root_orientation,
-                    dict(zip(self.skeleton.dof_names, q.tolist())), self._targets)
+        p = self._placement
+        return Pose(self.skeleton.name, self.solver.root, p.root_position, p.root_orientation,
+                    dict(zip(self.skeleton.dof_names, self.solver.q.tolist())), self._targets)
+
+    def world_positions(self) -> np.ndarray:
+        """World positions (n_frames, 3) [m] of every skeleton frame (a copy)."""
+        return self.solver.world_positions()
+
+    def world_rotations(self) -> np.ndarray:
+        """World rotations (n_frames, 3, 3) of every skeleton frame (a copy)."""
+        return self.solver.world_rotations()
 
     def effector_poses(self) -> dict[str, np.ndarray]:
         """``{effector: world transform (4, 4)}`` as achieved now."""
         return self.solver.effector_poses()
+
+    def effector_errors(self) -> dict[str, tuple[float, float]]:
+        """``{effector: (position error [m], orientation error [rad])}`` of the last solver step ({} if none)."""
+        return self.last_result.errors() if self.last_result is not None else {}
 
     def limit_mask(self, tolerance: float = 1e-4) -> np.ndarray:
         """(n_dofs,) True where an angle sits on a limit (within ``tolerance`` [rad])."""
@@ -242,45 +136,21 @@ class Document:
         return ((q <= sk.lower + tolerance) | (q >= sk.upper - tolerance)) & (sk.upper > sk.lower)
 
     # -- applying state ----------------------------------------------------------
-    def _standing_pose(self, flags: Mapping[str, TargetPose]) -> Pose:
-        """The skeleton's rest pose on its default root, targets on the effectors."""
-        sk = self.skeleton
-        solver = gsik.Solver(sk)
-        W = solver.world_from_root
-        targets = {}
-        for name, T in solver.effector_poses().items():
-            old = flags.get(name)
-            targets[name] = TargetPose.from_transform(
-                T, enabled=True if old is None else old.enabled, weight=1.0 if old is None else old.weight,
-                position_only=(name in self.POSITION_ONLY_BY_DEFAULT) if old is None else old.position_only)
-        return Pose(sk.name, sk.root, tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])),
-                    dict(zip(sk.dof_names, sk.rest.tolist())), targets)
-
-    def _check_pose(self, pose: Pose) -> None:
-        sk = self.skeleton
-        if pose.skeleton != sk.name:
-            raise PoseError(f"pose is for skeleton {pose.skeleton!r}, this document's is {sk.name!r}")
-        sk.frame_of(pose.root)
-        missing = [n for n in sk.dof_names if n not in pose.joints]
-        if missing:
-            raise PoseError(f"pose has no angle for {choices(missing)}")
-        effectors = [n for n in sk.effector_sites if n != pose.root]
-        if set(pose.targets) != set(effectors):
-            raise PoseError(f"pose targets {choices(pose.targets)} do not match the effectors {choices(effectors)}")
+    def _place_root(self, root: str, placement: RootPlacement) -> None:
+        """Pin ``root`` at ``placement``: the one place the root's placement is set."""
+        if root != self.solver.root:
+            self.solver.set_root(root)
+        self._placement = placement
+        self.solver.set_world_from_root(placement.world_from_root)
 
     def _restore(self, pose: Pose) -> None:
         """Make the document show ``pose`` exactly (no command)."""
-        self._check_pose(pose)
+        check_pose(self.skeleton, pose)
         q = np.clip(pose.q(self.skeleton), self.skeleton.lower, self.skeleton.upper)
-        if pose.root != self.solver.root:
-            self.solver.set_root(pose.root)
-        self._root_position = pose.root_position
-        self._root_orientation = pose.root_orientation
-        self.solver.set_world_from_root(pose.world_from_root)
+        self._place_root(pose.root, RootPlacement(pose.root_position, pose.root_orientation))
         self.solver.set_q(q)
         self._targets = {n: pose.targets[n] for n in self.solver.effector_names}
         self._push_targets()
-        self.needs_solving = True
         self.last_result = None
 
     def _push_targets(self) -> None:
@@ -300,35 +170,42 @@ class Document:
 
     def _snapped_targets(self) -> dict[str, TargetPose]:
         """Targets moved onto the achieved effector poses, flags kept."""
-        out = {}
-        for n, T in self.solver.effector_poses().items():
-            old = self._targets.get(n)
-            out[n] = TargetPose.from_transform(T) if old is None else TargetPose.from_transform(
-                T, old.enabled, old.weight, old.position_only)
-        return out
+        return {n: target_at(T, self._targets.get(n)) for n, T in self.solver.effector_poses().items()}
 
     # -- commands --------------------------------------------------------------
     def _interrupt_playback(self) -> None:
         """An edit, undo, redo or load ends a running playback first (recorded as its own undo step)."""
-        pb = self._playback
-        if pb is not None and not pb.finished and not pb.applying:
-            pb.stop()
+        if self._playback is not None:
+            self._playback.stop()
+
+    def _file_state(self) -> tuple[str | None, bool]:
+        return self.path, self.dirty
+
+    def _emit_file(self, before: tuple[str | None, bool]) -> None:
+        """``events.file`` when the path or the unsaved-changes flag differs from ``before``."""
+        if self._file_state() != before:
+            self.events.file.emit()
 
     def _edit(self, text: str, apply: Callable[[], None], merge_key: object | None = None,
-              kind: str = "pose") -> None:
+              signal: Signal | None = None) -> None:
+        """Run ``apply`` as one undo step (merged into the last one with the same ``merge_key``)."""
         self._interrupt_playback()
         merging = self.history.would_merge(merge_key)
-        before = None if merging else self.pose()  # a merged move keeps the drag's first "before"
+        before = self.history.commands[-1].before if merging else self.pose()  # a drag keeps its first "before"
+        file_state = self._file_state()
         apply()
         self.needs_solving = True
-        if merging:
-            self.history.push(Command(text, self.history.commands[-1].before, merge_key=merge_key))
-        else:
-            self.history.push(Command(text, before, merge_key=merge_key))
-        self.changed.emit(kind)
+        self.history.push(Command(text, before, merge_key=merge_key))
+        (signal or self.events.pose).emit()
         if not merging:
-            self.changed.emit("history")
-        self.changed.emit("file")
+            self.events.history.emit()
+        self._emit_file(file_state)
+
+    def _replaced(self, file_state: tuple[str | None, bool]) -> None:
+        """The whole pose and the history changed (undo, redo, open, new, a playback recorded)."""
+        self.events.pose.emit()
+        self.events.history.emit()
+        self._emit_file(file_state)
 
     def _effector(self, name: str) -> TargetPose:
         try:
@@ -341,13 +218,12 @@ class Document:
                    merge_key: object | None = None) -> None:
         """Replace one effector's target (the general form of every target edit).
 
-        Emits ``changed("targets")`` when only the position or orientation
-        changed, ``changed("options")`` when enabled, weight or position-only did.
+        Emits ``events.targets`` when only the position or orientation
+        changed, ``events.options`` when enabled, weight or position-only did.
         """
         self._effector(name)
         if not isinstance(target, TargetPose):
             raise gsik.TargetError(f"target for {name!r} must be a TargetPose, got {type(target).__name__}")
-
         old = self._targets[name]
         same_flags = (old.enabled, old.weight, old.position_only) == (target.enabled, target.weight,
                                                                       target.position_only)
@@ -356,7 +232,8 @@ class Document:
             self._targets[name] = target
             self._push_targets()
 
-        self._edit(text or f"Edit {name} target", apply, merge_key, kind="targets" if same_flags else "options")
+        signal = self.events.targets if same_flags else self.events.options
+        self._edit(text or f"Edit {name} target", apply, merge_key, signal)
 
     def move_targets(self, positions: Mapping[str, Sequence[float]], drag: object | None = None) -> None:
         """Move several targets at once (one undo step; merged over one ``drag`` token)."""
@@ -367,7 +244,7 @@ class Document:
             self._push_targets()
 
         key = None if drag is None else ("move", tuple(sorted(new)), drag)
-        self._edit(f"Move {', '.join(new)}", apply, key, kind="targets")
+        self._edit(f"Move {', '.join(new)}", apply, key, self.events.targets)
 
     def move_target(self, name: str, position, drag: object | None = None) -> None:
         """Move a target to a world position (3,) [m].
@@ -413,8 +290,7 @@ class Document:
     def snap_target(self, name: str) -> None:
         """Move one target onto its effector's achieved pose."""
         t = self._effector(name)
-        T = self.solver.effector_poses()[name]
-        self.set_target(name, TargetPose.from_transform(T, t.enabled, t.weight, t.position_only), f"Snap {name}")
+        self.set_target(name, target_at(self.solver.effector_poses()[name], t), f"Snap {name}")
 
     def set_root(self, name: str) -> None:
         """Pin another joint or site (usually the other foot); no joint moves.
@@ -429,13 +305,10 @@ class Document:
         def apply():
             old = self.solver.root
             self.solver.set_root(name)
-            W = self.solver.world_from_root
-            self._root_position = tuple(W[:3, 3])
-            self._root_orientation = tuple(quaternion_from_matrix(W[:3, :3]))
-            self.solver.set_world_from_root(self.pose().world_from_root)
+            self._place_root(name, RootPlacement.from_transform(self.solver.world_from_root))
             new = {n: t for n, t in self._targets.items() if n != name}
             if old in self.solver.effector_names:
-                new[old] = TargetPose.from_transform(self.solver.effector_poses()[old])
+                new[old] = target_at(self.solver.effector_poses()[old])
             self._targets = {n: new[n] for n in self.solver.effector_names}
             self._push_targets()
 
@@ -443,7 +316,7 @@ class Document:
 
     def set_pose(self, pose: Pose, text: str = "Set pose") -> None:
         """Replace the whole pose (angles, root, targets) as one undo step."""
-        self._check_pose(pose)
+        check_pose(self.skeleton, pose)
         self._edit(text, lambda: self._restore(pose))
 
     def set_angles(self, q, text: str = "Set angles", snap_targets: bool = True) -> None:
@@ -464,7 +337,8 @@ class Document:
 
     def reset(self) -> None:
         """Back to the standing pose on the default root; effector flags are kept."""
-        self.set_pose(self._standing_pose(self._targets), "Reset to standing pose")
+        self.set_pose(standing_pose(self.skeleton, self._targets, self.POSITION_ONLY_BY_DEFAULT),
+                      "Reset to standing pose")
 
     def random_pose(self, seed: int | None = None, amount: float = 0.35) -> None:
         """A random pose: every angle moved from rest by up to ``amount`` of the way to its limits."""
@@ -489,12 +363,13 @@ class Document:
         self._interrupt_playback()
         if not self.history.can_undo:
             return False
+        file_state = self._file_state()
         cmd = self.history.commands[self.history.index - 1]
         cmd.after = self.pose()
         cmd.merge_key = None
         self._restore(cmd.before)
         self.history.index -= 1
-        self._emit_all()
+        self._replaced(file_state)
         return True
 
     def redo(self) -> bool:
@@ -502,15 +377,11 @@ class Document:
         self._interrupt_playback()
         if not self.history.can_redo:
             return False
-        cmd = self.history.commands[self.history.index]
-        self._restore(cmd.after)
+        file_state = self._file_state()
+        self._restore(self.history.commands[self.history.index].after)
         self.history.index += 1
-        self._emit_all()
+        self._replaced(file_state)
         return True
-
-    def _emit_all(self) -> None:
-        for kind in ("pose", "history", "file"):
-            self.changed.emit(kind)
 
     # -- solver ----------------------------------------------------------------
     def step(self) -> gsik.SolveResult:
@@ -522,15 +393,11 @@ class Document:
         self.needs_solving = result.status is gsik.Status.BUDGET_EXHAUSTED
         return result
 
-    @property
-    def settings(self) -> gsik.SolverSettings:
-        return self.solver.settings
-
     def configure(self, **changes) -> None:
         """Change solver settings (validated by gsik; :class:`gsik.SolverError` on a bad value)."""
         self.solver.configure(**changes)
         self.needs_solving = True
-        self.changed.emit("settings")
+        self.events.settings.emit()
 
     # -- files -----------------------------------------------------------------
     def open(self, path: str) -> tuple[str, ...]:
@@ -541,12 +408,13 @@ class Document:
         """
         read: PoseRead = read_pose(path, self.skeleton)
         self._interrupt_playback()
+        file_state = self._file_state()
         self._restore(read.pose)
         self.history.clear()
         self.path = str(path)
         if read.warnings:
             self.history.clean_index = None  # what is shown differs from the file
-        self._emit_all()
+        self._replaced(file_state)
         return read.warnings
 
     def save(self, path: str | None = None) -> None:
@@ -558,20 +426,22 @@ class Document:
         target = path or self.path
         if not target:
             raise gsik.GsikFileError("no file name to save to (use Save As)")
+        file_state = self._file_state()
         write_pose(target, self.pose())
         self.path = str(target)
         self.history.set_clean()
-        self.changed.emit("file")
+        self._emit_file(file_state)
 
     def new(self) -> None:
         """The standing pose, no file, empty history."""
         self._interrupt_playback()
-        self._restore(self._standing_pose({}))
+        file_state = self._file_state()
+        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
         self.history.clear()
         self.path = None
-        self._emit_all()
+        self._replaced(file_state)
 
-    # -- playback (hook for walks and scenarios) -------------------------------
+    # -- playback: frames shown without undo steps, then recorded as one --------
     def playback(self, frames: Motion | Sequence[Mapping[str, gsik.Target | TargetPose | None]],
                  text: str = "Play", frame_time: float = 1 / 30) -> Playback:
         """A :class:`Playback` of a :class:`gsik.anim.motion.Motion` or of a sequence of target dicts.
@@ -579,99 +449,48 @@ class Document:
         A playback running already is stopped first. Any edit, undo, redo or
         load while it runs stops it (what was played so far stays, as one step).
         """
+        from gsik_studio.model.playback import Playback
+
         self._interrupt_playback()
-        pb = Playback(self, frames, text, frame_time)
-        self._playback = pb
-        return pb
+        self._playback = Playback(self, frames, text, frame_time)
+        return self._playback
 
+    @property
+    def playing(self) -> Playback | None:
+        """The running playback, if any."""
+        return self._playback
 
-class Playback:
-    """Plays frames onto a document, then records the result as one undo step.
+    def show_motion_frame(self, root: str, world_from_root: np.ndarray, q: np.ndarray) -> None:
+        """Show one frame of a motion: root, its world transform (4, 4), angles (n_dofs,) [rad]; targets snap on."""
+        self._place_root(root, RootPlacement.from_transform(world_from_root))
+        self.solver.set_q(np.clip(q, self.skeleton.lower, self.skeleton.upper))
+        self._targets = self._snapped_targets()
+        self._push_targets()
+        self.needs_solving = False
+        self.events.pose.emit()
 
-    A frame is either a frame of a :class:`gsik.anim.motion.Motion` (angles, root
-    and root transform applied directly) or a dict of targets (applied, then
-    the solver steps). Call :meth:`advance` once per frame (the window does it
-    from a timer every :attr:`frame_time` seconds) until it returns False,
-    or :meth:`stop` to end early; the played result is then one command
-    (``text``) that undo takes back to the pose before playing.
-    """
+    def drive_targets(self, frame: Mapping[str, gsik.Target | TargetPose | None]) -> None:
+        """Show one frame of target dicts (None disables an effector), then step the solver once.
 
-    def __init__(self, doc: Document, frames, text: str, frame_time: float):
-        self.doc = doc
-        self.text = text
-        if isinstance(frames, Motion):
-            if frames.skeleton.name != doc.skeleton.name:
-                raise gsik.GsikError(f"motion is for skeleton {frames.skeleton.name!r}, not {doc.skeleton.name!r}")
-            self.motion: Motion | None = frames
-            self.target_frames: Sequence = ()
-            self.n_frames = frames.n_frames
-            self.frame_time = float(frames.frame_time)
-        else:
-            self.motion = None
-            self.target_frames = list(frames)
-            self.n_frames = len(self.target_frames)
-            self.frame_time = float(frame_time)
-        self.index = 0
-        self.before = doc.pose()
-        self.finished = False
-        self.applying = False
+        Names that are not effectors of the current root (the root itself) are skipped.
+        """
+        for name, t in frame.items():
+            old = self._targets.get(name)
+            if old is None:
+                continue
+            if t is None:
+                self._targets[name] = old.replace(enabled=False)
+            else:
+                self._targets[name] = t if isinstance(t, TargetPose) else driven_target(t, old)
+        self._push_targets()
+        self.step()
+        self.events.pose.emit()
 
-    def advance(self) -> bool:
-        """Show the next frame; False when there is none (the playback then finishes)."""
-        if self.finished:
-            return False
-        if self.index >= self.n_frames:
-            self.stop()
-            return False
-        doc = self.doc
-        self.applying = True
-        try:
-            self._apply(doc)
-        finally:
-            self.applying = False
-        self.index += 1
-        doc.changed.emit("pose")
-        return True
-
-    def _apply(self, doc: Document) -> None:
-        if self.motion is not None:
-            m = self.motion
-            root = m.roots[self.index]
-            if root != doc.solver.root:
-                doc.solver.set_root(root)
-            W = m.world_from_root[self.index]
-            doc._root_position = tuple(W[:3, 3])
-            doc._root_orientation = tuple(quaternion_from_matrix(W[:3, :3]))
-            doc.solver.set_world_from_root(transform(matrix_from_quaternion(np.array(doc._root_orientation)),
-                                                     W[:3, 3]))
-            doc.solver.set_q(np.clip(m.q[self.index], doc.skeleton.lower, doc.skeleton.upper))
-            doc._targets = doc._snapped_targets()
-            doc._push_targets()
-            doc.needs_solving = False
-        else:
-            frame = self.target_frames[self.index]
-            for name, t in frame.items():
-                old = doc._targets.get(name)
-                if old is None:  # not an effector of the current root (the root itself): nothing to drive
-                    continue
-                if t is None:
-                    doc._targets[name] = old.replace(enabled=False)
-                elif isinstance(t, TargetPose):
-                    doc._targets[name] = t
-                else:
-                    q = old.orientation if t.orientation is None else tuple(quaternion_from_matrix(t.orientation))
-                    doc._targets[name] = TargetPose(tuple(t.position), q, True, t.weight,
-                                                    t.position_only or t.orientation is None)
-            doc._push_targets()
-            doc.step()
-
-    def stop(self) -> None:
-        """End the playback here and record it as one undo step."""
-        if self.finished:
-            return
-        self.finished = True
-        if self.doc._playback is self:
-            self.doc._playback = None
-        self.doc.history.push(Command(self.text, self.before))
-        self.doc.needs_solving = True
-        self.doc._emit_all()
+    def record_playback(self, playback: Playback) -> None:
+        """A playback ended: what it played becomes one undo step back to ``playback.before``."""
+        if self._playback is playback:
+            self._playback = None
+        file_state = self._file_state()
+        self.history.push(Command(playback.text, playback.before))
+        self.needs_solving = True
+        self._replaced(file_state)
