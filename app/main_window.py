@@ -23,7 +23,6 @@ from PySide6.QtCore import Qt
 import gsik
 from gsik_studio.model import Document, Playback
 from gsik_studio.qt_compat import protect_none
-from gsik.io.pose import TargetPose
 
 FRAME_INTERVAL_MS = 16  # ~60 Hz
 READOUT_INTERVAL_S = 0.25  # panel and status texts refresh at most this often
@@ -714,9 +713,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.stop_playback()
         if sc.n_frames > 1:  # start at the first frame's targets, then play the rest
             t0 = sc.targets_at(0)
-            first = first.replace(targets={n: (TargetPose.from_transform(
-                np.vstack([np.column_stack([t0[n].orientation, t0[n].position]), [0, 0, 0, 1]]))
-                if n in t0 else t) for n, t in first.targets.items()})
+            first = first.replace(targets={n: t0.get(n, t) for n, t in first.targets.items()})
         self.doc.set_pose(first, f"Scenario {_nice(name)}")
         self.viewport.frame_all()
         self.statusBar().showMessage(f"Scenario {_nice(name)}: {sc.description}", 8000)

@@ -22,7 +22,8 @@ import numpy as np
 import gsik
 from gsik.errors import PoseError, choices
 from gsik.anim.motion import Motion
-from gsik.io.pose import Pose, PoseRead, TargetPose, read_pose, write_pose
+from gsik.io.pose import Pose, PoseRead, read_pose, write_pose
+from gsik.targets import Target
 from gsik.rotations import matrix_from_axis_angle, matrix_from_quaternion, quaternion_from_matrix, transform
 
 #: Axis names of the world, for rotating a target about one of them.
@@ -188,8 +189,7 @@ class Document:
         self.last_result: gsik.SolveResult | None = None
         self.last_solve_time = 0.0  # [s]
         self.needs_solving = True
-        self._targets: dict[str, TargetPose] = {}
-        self._solver_targets: dict[str, tuple[TargetPose, gsik.Target]] = {}
+        self._targets: dict[str, Target] = {}
         self._playback: Playback | None = None
         self._root_position = (0.0, 0.0, 0.0)
         self._root_orientation = (1.0, 0.0, 0.0, 0.0)
@@ -208,8 +208,8 @@ class Document:
         return self.solver.effector_names
 
     @property
-    def targets(self) -> dict[str, TargetPose]:
-        """``{effector: TargetPose}`` (a new dict; the targets are immutable)."""
+    def targets(self) -> dict[str, Target]:
+        """``{effector: Target}`` (a new dict; the targets are immutable)."""
         return dict(self._targets)
 
     @property
@@ -242,7 +242,7 @@ class Document:
         return ((q <= sk.lower + tolerance) | (q >= sk.upper - tolerance)) & (sk.upper > sk.lower)
 
     # -- applying state ----------------------------------------------------------
-    def _standing_pose(self, flags: Mapping[str, TargetPose]) -> Pose:
+    def _standing_pose(self, flags: Mapping[str, Target]) -> Pose:
         """The skeleton's rest pose on its default root, targets on the effectors."""
         sk = self.skeleton
         solver = gsik.Solver(sk)
@@ -250,7 +250,7 @@ class Document:
         targets = {}
         for name, T in solver.effector_poses().items():
             old = flags.get(name)
-            targets[name] = TargetPose.from_transform(
+            targets[name] = Target.from_transform(
                 T, enabled=True if old is None else old.enabled, weight=1.0 if old is None else old.weight,
                 position_only=(name in self.POSITION_ONLY_BY_DEFAULT) if old is None else old.position_only)
         return Pose(sk.name, sk.root, tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])),
@@ -284,27 +284,17 @@ class Document:
         self.last_result = None
 
     def _push_targets(self) -> None:
-        """Hand the enabled targets to the solver (a gsik.Target is made once per TargetPose)."""
-        cache = self._solver_targets
-        out = {}
-        for n, t in self._targets.items():
-            if not t.enabled:
-                continue
-            hit = cache.get(n)
-            if hit is None or hit[0] is not t:
-                hit = (t, gsik.Target(t.position, t.orientation, weight=t.weight, position_only=t.position_only))
-                cache[n] = hit
-            out[n] = hit[1]
-        self.solver.set_targets(out)
+        """Hand the targets to the solver (it skips the disabled ones)."""
+        self.solver.set_targets(self._targets)
         self.needs_solving = True
 
-    def _snapped_targets(self) -> dict[str, TargetPose]:
+    def _snapped_targets(self) -> dict[str, Target]:
         """Targets moved onto the achieved effector poses, flags kept."""
         out = {}
         for n, T in self.solver.effector_poses().items():
             old = self._targets.get(n)
-            out[n] = TargetPose.from_transform(T) if old is None else TargetPose.from_transform(
-                T, old.enabled, old.weight, old.position_only)
+            out[n] = Target.from_transform(T) if old is None else Target.from_transform(
+                T, old.weight, old.position_only, old.enabled)
         return out
 
     # -- commands --------------------------------------------------------------
@@ -330,14 +320,14 @@ class Document:
             self.changed.emit("history")
         self.changed.emit("file")
 
-    def _effector(self, name: str) -> TargetPose:
+    def _effector(self, name: str) -> Target:
         try:
             return self._targets[name]
         except KeyError:
             why = " (it is the IK root)" if name == self.root else ""
             raise gsik.TargetError(f"no effector {name!r}{why}; effectors: {choices(self._targets)}") from None
 
-    def set_target(self, name: str, target: TargetPose, text: str | None = None,
+    def set_target(self, name: str, target: Target, text: str | None = None,
                    merge_key: object | None = None) -> None:
         """Replace one effector's target (the general form of every target edit).
 
@@ -345,8 +335,8 @@ class Document:
         changed, ``changed("options")`` when enabled, weight or position-only did.
         """
         self._effector(name)
-        if not isinstance(target, TargetPose):
-            raise gsik.TargetError(f"target for {name!r} must be a TargetPose, got {type(target).__name__}")
+        if not isinstance(target, Target):
+            raise gsik.TargetError(f"target for {name!r} must be a gsik.Target, got {type(target).__name__}")
 
         old = self._targets[name]
         same_flags = (old.enabled, old.weight, old.position_only) == (target.enabled, target.weight,
@@ -384,9 +374,7 @@ class Document:
 
     def orient_target(self, name: str, orientation, drag: object | None = None) -> None:
         """Set a target's world orientation: quaternion (w, x, y, z) or matrix (3, 3)."""
-        o = np.asarray(orientation, dtype=float)
-        q = quaternion_from_matrix(o) if o.shape == (3, 3) else o
-        t = self._effector(name).replace(orientation=tuple(q))
+        t = self._effector(name).replace(orientation=orientation)  # a matrix is kept as the rotation
         self.set_target(name, t, f"Rotate {name}", None if drag is None else ("rotate", name, drag))
 
     def rotate_target(self, name: str, axis: str, angle: float) -> None:
@@ -395,7 +383,7 @@ class Document:
             raise ValueError(f"axis must be one of {choices(WORLD_AXES)}, got {axis!r}")
         t = self._effector(name)
         R = matrix_from_axis_angle(np.array(WORLD_AXES[axis]), angle) @ t.rotation
-        self.set_target(name, t.replace(orientation=tuple(quaternion_from_matrix(R))),
+        self.set_target(name, t.replace(orientation=R),
                         f"Rotate {name} about {axis}")
 
     def set_target_options(self, name: str, *, enabled: bool | None = None, weight: float | None = None,
@@ -414,7 +402,7 @@ class Document:
         """Move one target onto its effector's achieved pose."""
         t = self._effector(name)
         T = self.solver.effector_poses()[name]
-        self.set_target(name, TargetPose.from_transform(T, t.enabled, t.weight, t.position_only), f"Snap {name}")
+        self.set_target(name, Target.from_transform(T, t.weight, t.position_only, t.enabled), f"Snap {name}")
 
     def set_root(self, name: str) -> None:
         """Pin another joint or site (usually the other foot); no joint moves.
@@ -435,7 +423,7 @@ class Document:
             self.solver.set_world_from_root(self.pose().world_from_root)
             new = {n: t for n, t in self._targets.items() if n != name}
             if old in self.solver.effector_names:
-                new[old] = TargetPose.from_transform(self.solver.effector_poses()[old])
+                new[old] = Target.from_transform(self.solver.effector_poses()[old])
             self._targets = {n: new[n] for n in self.solver.effector_names}
             self._push_targets()
 
@@ -572,7 +560,7 @@ class Document:
         self._emit_all()
 
     # -- playback (hook for walks and scenarios) -------------------------------
-    def playback(self, frames: Motion | Sequence[Mapping[str, gsik.Target | TargetPose | None]],
+    def playback(self, frames: Motion | Sequence[Mapping[str, Target | None]],
                  text: str = "Play", frame_time: float = 1 / 30) -> Playback:
         """A :class:`Playback` of a :class:`gsik.anim.motion.Motion` or of a sequence of target dicts.
 
@@ -656,12 +644,11 @@ class Playback:
                     continue
                 if t is None:
                     doc._targets[name] = old.replace(enabled=False)
-                elif isinstance(t, TargetPose):
-                    doc._targets[name] = t
+                elif t.position_only:  # no orientation asked for: keep the one shown
+                    doc._targets[name] = old.replace(position=t.position, weight=t.weight, position_only=True,
+                                                     enabled=t.enabled)
                 else:
-                    q = old.orientation if t.orientation is None else tuple(quaternion_from_matrix(t.orientation))
-                    doc._targets[name] = TargetPose(tuple(t.position), q, True, t.weight,
-                                                    t.position_only or t.orientation is None)
+                    doc._targets[name] = t
             doc._push_targets()
             doc.step()
 

@@ -266,8 +266,7 @@ def cmd_solve(args: argparse.Namespace, out: TextIO) -> int:
     pose = read.pose
     solver = gsik.Solver(sk.with_root(pose.root), q0=pose.q(sk), world_from_root=pose.world_from_root,
                          **_settings_overrides(args))
-    targets = {name: gsik.Target(t.position, t.rotation, weight=t.weight, position_only=t.position_only)
-               for name, t in pose.targets.items() if t.enabled}
+    targets = {name: t for name, t in pose.targets.items() if t.enabled}
     start = time.perf_counter()
     result = solver.solve(targets)
     elapsed = time.perf_counter() - start

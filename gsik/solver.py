@@ -319,7 +319,7 @@ class Solver:
                 self._tR[k] = np.eye(3)
                 continue
             self._tp[k] = t.position
-            self._tR[k] = np.eye(3) if t.orientation is None else t.orientation
+            self._tR[k] = t.rotation
             self._row_w[k, :3] = t.weight
             if t.uses_orientation:
                 self._row_w[k, 3:] = t.weight * ow
@@ -409,7 +409,7 @@ class Solver:
 
     # -- targets --------------------------------------------------------------
     def set_targets(self, targets: Mapping[str, Target | None]) -> None:
-        """Replace all targets. An effector with no target (or ``None``) is disabled.
+        """Replace all targets. An effector with no target (``None``, or a disabled one) is free.
 
         Raises:
             TargetError: for a name that is not one of :attr:`effector_names`
@@ -439,7 +439,8 @@ class Solver:
                 continue
             if not isinstance(t, Target):
                 raise TargetError(f"target for {name!r} must be a gsik.Target, got {type(t).__name__}")
-            out[name] = t
+            if t.enabled:  # a disabled target leaves its effector free, as no target does
+                out[name] = t
         return out
 
     # -- solving --------------------------------------------------------------
