@@ -272,7 +272,7 @@ def cmd_solve(args: argparse.Namespace, out: TextIO) -> int:
     elapsed = time.perf_counter() - start
     out.write(f"pose {args.pose}: skeleton {sk.name}, root {pose.root}, {len(targets)} of "
               f"{len(pose.targets)} targets enabled\n")
-    out.write(f"status: {result.status.value} after {result.iterations} iterations ({result.sweeps} sweeps, "
+    out.write(f"status: {result.status.label} after {result.iterations} iterations ({result.sweeps} sweeps, "
               f"{result.attempts} attempt{'s' if result.attempts != 1 else ''}) in {elapsed * 1e3:.1f} ms\n")
     w = max((len(n) for n in result.effector_names), default=8)
     out.write(f"  {'effector':<{w}}  {'position error':>16}  {'orientation error':>18}\n")
@@ -355,7 +355,7 @@ def cmd_scenarios(args: argparse.Namespace, out: TextIO) -> int:
     out.write(format_table(reports) + "\n")
     if args.verbose:
         for r in reports:
-            out.write(f"\n{r.name}: {r.status.value}, {r.ms_per_frame:.3f} ms per frame\n")
+            out.write(f"\n{r.name}: {r.status.label}, {r.ms_per_frame:.3f} ms per frame\n")
             for name, (pe, oe) in r.errors().items():
                 out.write(f"  {name:<12} {_mm(pe):>14} {_deg(oe):>14}\n")
     if writers:

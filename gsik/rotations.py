@@ -63,7 +63,7 @@ def rotvec_from_matrix(R: np.ndarray) -> np.ndarray:
     Accurate over the whole range, including angles near pi where the
     antisymmetric part vanishes.
     """
-    from gsik._kernels import rotvec_from_matrix as log_map
+    from gsik.kernels.kinematics import rotvec_from_matrix as log_map
 
     return log_map(np.ascontiguousarray(R, dtype=float))
 

@@ -483,7 +483,7 @@ def format_table(reports: Sequence[ScenarioReport]) -> str:
         rows.append((
             r.name,
             r.root,
-            r.status.value,
+            r.status.label,
             "yes" if r.settled else "NO",
             "-" if r.settle_frames is None else str(r.settle_frames),
             str(r.settle_sweeps),

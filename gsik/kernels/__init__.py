@@ -1,0 +1,151 @@
+"""The compiled kernels and their named contracts (pinocchio's Model / Data split).
+
+- :class:`KinematicModel`: the immutable structure-of-arrays a skeleton seen
+  from one root gives (built in one place, :func:`gsik.kinematics.kinematic_model`),
+  read by forward kinematics, the Jacobian and the solver.
+- :class:`KernelSettings`: the solver settings the kernels read
+  (made by :meth:`gsik.SolverSettings.kernel_settings`).
+- :class:`TargetArrays`: the packed targets, one row per effector.
+- :class:`Workspace`: every per-step buffer, allocated once (:func:`make_workspace`).
+
+Modules: :mod:`~gsik.kernels.kinematics` (FK, errors, Jacobian, normal
+equations), :mod:`~gsik.kernels.pgs` (Projected Gauss-Seidel, bounded
+solve), :mod:`~gsik.kernels.step` (a frame step and a full solve). Nothing
+here validates anything: the public modules check their inputs first.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+# Indices into the statistics vector the kernels fill.
+O_SWEEPS, O_RESIDUAL, O_UPDATE, O_COST, O_STEP_NORM, O_ACCEPTED, O_LAMBDA, O_STATUS, O_ITERATIONS = range(9)
+N_STATS = 9
+# Status codes the kernels write into stats[O_STATUS]; gsik.solver.Status has these values.
+CONVERGED, STALLED, BUDGET_EXHAUSTED = 0, 1, 2
+
+
+class KinematicModel(NamedTuple):
+    """A skeleton seen from one IK root, as the kernels read it (read-only arrays).
+
+    Attributes:
+        frame_parent: (n_frames,) parent frame index, -1 for the top; topological order.
+        frame_offset: (n_frames, 3) position in the parent frame [m].
+        frame_rotation: (n_frames, 3, 3) fixed rotation in the parent frame.
+        frame_axis: (n_frames, 3) the DOF's axis in the frame (unit), zero without a DOF.
+        frame_dof: (n_frames,) the frame's DOF index, -1 for none.
+        dof_frame: (n_dofs,) the frame each DOF turns.
+        lower, upper: (n_dofs,) joint limits [rad].
+        effector_frame: (m,) frame index of each effector.
+        sign: (m, n_dofs) +1 / -1 / 0: how DOF ``d`` turns effector ``k`` seen from the root.
+        effector_dofs: (m, n_dofs) the DOFs with a non-zero sign, first ``effector_dof_count[k]`` valid.
+        effector_dof_count: (m,).
+    """
+
+    frame_parent: np.ndarray
+    frame_offset: np.ndarray
+    frame_rotation: np.ndarray
+    frame_axis: np.ndarray
+    frame_dof: np.ndarray
+    dof_frame: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    effector_frame: np.ndarray
+    sign: np.ndarray
+    effector_dofs: np.ndarray
+    effector_dof_count: np.ndarray
+
+
+class KernelSettings(NamedTuple):
+    """The settings a step or a solve reads (see :class:`gsik.SolverSettings` for their meaning)."""
+
+    damping: float
+    sweeps: int
+    residual_tolerance: float
+    update_tolerance: float
+    stall_tolerance: float
+    max_step: float
+    adaptive_damping: bool
+    warm_start: bool
+    position_tolerance: float
+    orientation_tolerance: float
+    settle_tolerance: float
+    subspace_minimization: bool
+
+
+class TargetArrays(NamedTuple):
+    """The targets, one row per effector of the model.
+
+    Attributes:
+        position: (m, 3) world positions [m].
+        rotation: (m, 3, 3) world orientations.
+        row_weight: (m, 6) weights of the 3 position then 3 orientation rows (0: row unused).
+    """
+
+    position: np.ndarray
+    rotation: np.ndarray
+    row_weight: np.ndarray
+
+
+class Workspace(NamedTuple):
+    """State carried between frames and scratch for one step, allocated once per model.
+
+    Attributes:
+        R: (n_frames, 3, 3) world rotations at the current ``q``.
+        p: (n_frames, 3) world positions [m] at the current ``q``.
+        err: (2, m) position [m] and orientation [rad] errors at the current ``q``.
+        stats: (N_STATS,) what the last call did (indices ``O_*``).
+        x: (n_dofs,) the last step [rad], the next step's warm start.
+        lam: (1,) the adaptive damping carried between frames.
+        e: (6m,) error vector; A, A_damped: (n_dofs, n_dofs); b, lo, hi, x_prev, q_new, x_solve: (n_dofs,);
+        R_new, p_new, err_new: frames and errors at a trial ``q``; M: (3, 3);
+        v: (2, n_dofs, 6) one effector's compact Jacobian block and its weighted copy.
+    """
+
+    R: np.ndarray
+    p: np.ndarray
+    err: np.ndarray
+    stats: np.ndarray
+    x: np.ndarray
+    lam: np.ndarray
+    e: np.ndarray
+    A: np.ndarray
+    A_damped: np.ndarray
+    b: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    x_prev: np.ndarray
+    q_new: np.ndarray
+    x_solve: np.ndarray
+    R_new: np.ndarray
+    p_new: np.ndarray
+    err_new: np.ndarray
+    M: np.ndarray
+    v: np.ndarray
+
+
+def make_workspace(n_frames: int, n_dofs: int, n_effectors: int, err: np.ndarray | None = None) -> Workspace:
+    """A zeroed :class:`Workspace`; ``err`` (2, m) may be given to share a caller's buffer."""
+    n, m = n_dofs, n_effectors
+    return Workspace(
+        R=np.zeros((n_frames, 3, 3)), p=np.zeros((n_frames, 3)), err=np.zeros((2, m)) if err is None else err,
+        stats=np.zeros(N_STATS), x=np.zeros(n), lam=np.zeros(1), e=np.zeros(6 * m), A=np.zeros((n, n)),
+        A_damped=np.zeros((n, n)), b=np.zeros(n), lo=np.zeros(n), hi=np.zeros(n), x_prev=np.zeros(n),
+        q_new=np.zeros(n), x_solve=np.zeros(n), R_new=np.zeros((n_frames, 3, 3)), p_new=np.zeros((n_frames, 3)),
+        err_new=np.zeros((2, m)), M=np.zeros((3, 3)), v=np.zeros((2, n, 6)),
+    )
+
+
+def compiled_entry(kernel, *args):
+    """``kernel``'s compiled code for the types of ``args``, callable without numba's type dispatch.
+
+    Dispatch types every argument on every call, which costs microseconds
+    for NamedTuples of arrays; a caller that always passes the same types
+    (the solver: persistent buffers) calls the entry point instead. Without
+    numba, the plain function.
+    """
+    if not hasattr(kernel, "overloads"):
+        return kernel
+    return kernel.compile(tuple(kernel.typeof_pyval(a) for a in args))
