@@ -46,6 +46,9 @@ class Status(enum.IntEnum):
         return self.name.lower().replace("_", " ")
 
 
+_STATUSES = tuple(Status)  # by code: a tuple index costs less than Status(code)
+
+
 class SolveResult(NamedTuple):
     """What a step or a solve produced. Plain data; arrays are read-only copies.
 
@@ -343,7 +346,7 @@ class Solver:
         out = self._state.copy()
         n, m = self._q.shape[0], self._ws.err.shape[1]
         stats = st.tolist()
-        return SolveResult(out[:n], Status(int(stats[O_STATUS])), int(stats[O_ITERATIONS]), int(stats[O_SWEEPS]),
+        return SolveResult(out[:n], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]), int(stats[O_SWEEPS]),
                            stats[residual_index], self._topo.effector_names, out[n:n + m], out[n + m:],
                            stats[O_STEP_NORM], attempts)
 

@@ -6,7 +6,7 @@
 - :class:`KernelSettings`: the solver settings the kernels read
   (made by :meth:`gsik.SolverSettings.kernel_settings`).
 - :class:`TargetArrays`: the packed targets, one row per effector.
-- :class:`Workspace`: every per-step buffer, allocated once (:func:`make_workspace`).
+- :class:`Workspace`: the state kept between steps (:func:`make_workspace`); :class:`Scratch`: a call's buffers.
 
 Modules: :mod:`~gsik.kernels.kinematics` (FK, errors, Jacobian, normal
 equations), :mod:`~gsik.kernels.pgs` (Projected Gauss-Seidel, bounded
@@ -19,6 +19,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+
+from gsik._jit import njit
 
 # Indices into the statistics vector the kernels fill.
 O_SWEEPS, O_RESIDUAL, O_UPDATE, O_COST, O_STEP_NORM, O_ACCEPTED, O_LAMBDA, O_STATUS, O_ITERATIONS = range(9)
@@ -90,7 +92,7 @@ class TargetArrays(NamedTuple):
 
 
 class Workspace(NamedTuple):
-    """State carried between frames and scratch for one step, allocated once per model.
+    """The state a step reads and writes, kept between calls (allocated once per model).
 
     Attributes:
         R: (n_frames, 3, 3) world rotations at the current ``q``.
@@ -99,9 +101,6 @@ class Workspace(NamedTuple):
         stats: (N_STATS,) what the last call did (indices ``O_*``).
         x: (n_dofs,) the last step [rad], the next step's warm start.
         lam: (1,) the adaptive damping carried between frames.
-        e: (6m,) error vector; A, A_damped: (n_dofs, n_dofs); b, lo, hi, x_prev, q_new, x_solve: (n_dofs,);
-        R_new, p_new, err_new: frames and errors at a trial ``q``; M: (3, 3);
-        v: (2, n_dofs, 6) one effector's compact Jacobian block and its weighted copy.
     """
 
     R: np.ndarray
@@ -110,6 +109,21 @@ class Workspace(NamedTuple):
     stats: np.ndarray
     x: np.ndarray
     lam: np.ndarray
+
+
+class Scratch(NamedTuple):
+    """Per-call buffers of a step or a solve, made inside the kernel by :func:`make_scratch`.
+
+    Twelve allocations in compiled code cost less than unboxing twelve arrays
+    passed in from Python (measured: ~0.25 µs against ~0.55 µs).
+
+    Attributes:
+        e: (6m,) error vector. A: (n_dofs, n_dofs) ``J^T W J``; A_damped: its damped copy (solve only).
+        b, lo, hi, x_prev, q_new: (n_dofs,); x_solve: (n_dofs,) a solve's step (solve only).
+        R_new, p_new, err_new: frames and errors at a trial ``q``. M: (3, 3).
+        v: (2, n_dofs, 6) one effector's compact Jacobian block and its weighted copy.
+    """
+
     e: np.ndarray
     A: np.ndarray
     A_damped: np.ndarray
@@ -128,14 +142,18 @@ class Workspace(NamedTuple):
 
 def make_workspace(n_frames: int, n_dofs: int, n_effectors: int, err: np.ndarray | None = None) -> Workspace:
     """A zeroed :class:`Workspace`; ``err`` (2, m) may be given to share a caller's buffer."""
-    n, m = n_dofs, n_effectors
-    return Workspace(
-        R=np.zeros((n_frames, 3, 3)), p=np.zeros((n_frames, 3)), err=np.zeros((2, m)) if err is None else err,
-        stats=np.zeros(N_STATS), x=np.zeros(n), lam=np.zeros(1), e=np.zeros(6 * m), A=np.zeros((n, n)),
-        A_damped=np.zeros((n, n)), b=np.zeros(n), lo=np.zeros(n), hi=np.zeros(n), x_prev=np.zeros(n),
-        q_new=np.zeros(n), x_solve=np.zeros(n), R_new=np.zeros((n_frames, 3, 3)), p_new=np.zeros((n_frames, 3)),
-        err_new=np.zeros((2, m)), M=np.zeros((3, 3)), v=np.zeros((2, n, 6)),
-    )
+    return Workspace(R=np.zeros((n_frames, 3, 3)), p=np.zeros((n_frames, 3)),
+                     err=np.zeros((2, n_effectors)) if err is None else err, stats=np.zeros(N_STATS),
+                     x=np.zeros(n_dofs), lam=np.zeros(1))
+
+
+@njit(cache=True)
+def make_scratch(n_frames, n, m, for_solve):
+    """A :class:`Scratch` (uninitialised) for ``n`` DOFs and ``m`` effectors; ``for_solve`` adds a solve's buffers."""
+    k = n if for_solve else 0
+    return Scratch(np.empty(6 * m), np.empty((n, n)), np.empty((k, k)), np.empty(n), np.empty(n), np.empty(n),
+                   np.empty(n), np.empty(n), np.empty(k), np.empty((n_frames, 3, 3)), np.empty((n_frames, 3)),
+                   np.empty((2, m)), np.empty((3, 3)), np.empty((2, n, 6)))
 
 
 def compiled_entry(kernel, *args):

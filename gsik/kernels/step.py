@@ -2,7 +2,8 @@
 
 ``model`` is a :class:`~gsik.kernels.KinematicModel`, ``settings`` a
 :class:`~gsik.kernels.KernelSettings`, ``targets`` a
-:class:`~gsik.kernels.TargetArrays`, ``ws`` a :class:`~gsik.kernels.Workspace`.
+:class:`~gsik.kernels.TargetArrays`, ``ws`` a :class:`~gsik.kernels.Workspace` (state kept between
+calls), ``sc`` a :class:`~gsik.kernels.Scratch` (made by each call: allocating it costs less than passing it in).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import math
 import numpy as np
 
 from gsik._jit import njit
-from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_ACCEPTED, O_COST, O_ITERATIONS, O_LAMBDA,
+from gsik.kernels import (BUDGET_EXHAUSTED, make_scratch, CONVERGED, N_STATS, O_ACCEPTED, O_COST, O_ITERATIONS, O_LAMBDA,
                           O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, STALLED)
 from gsik.kernels.kinematics import effector_errors, forward_kinematics, linear_system
 from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
@@ -70,9 +71,9 @@ def _evaluate(model, targets, root, W, q, R, p, e, err, M):
 
 
 @njit(cache=True)
-def _idle(ws, cost):
+def _idle(ws, sc, cost):
     """Every target already met: an idle frame costs one error evaluation."""
-    ws.err[:, :] = ws.err_new
+    ws.err[:, :] = sc.err_new
     ws.x[:] = 0.0
     st = ws.stats
     st[O_SWEEPS] = 0
@@ -85,28 +86,28 @@ def _idle(ws, cost):
 
 
 @njit(cache=True)
-def _step_solve(model, settings, q, lam, ws):
+def _step_solve(model, settings, q, lam, ws, sc):
     """Solve ``(A + lam I) x = b`` within the limits and the step bound, warm-started from ``ws.x``."""
     n = q.shape[0]
-    A, x, lo, hi = ws.A, ws.x, ws.lo, ws.hi
+    A, x, lo, hi = sc.A, ws.x, sc.lo, sc.hi
     for i in range(n):
         A[i, i] += lam
     _bounds(q, model.lower, model.upper, settings.max_step, lo, hi)
-    ws.x_prev[:] = x
+    sc.x_prev[:] = x
     if settings.warm_start:
         for i in range(n):
             x[i] = min(max(x[i], lo[i]), hi[i])
     else:
         x[:] = 0.0
     if settings.subspace_minimization:
-        bounded_solve(A, ws.b, x, lo, hi, settings.sweeps, ws.stats)
+        bounded_solve(A, sc.b, x, lo, hi, settings.sweeps, ws.stats)
     else:
-        projected_gauss_seidel(A, ws.b, x, lo, hi, settings.sweeps, settings.residual_tolerance,
-                               settings.update_tolerance, ws.x_prev, settings.stall_tolerance, ws.stats)
+        projected_gauss_seidel(A, sc.b, x, lo, hi, settings.sweeps, settings.residual_tolerance,
+                               settings.update_tolerance, sc.x_prev, settings.stall_tolerance, ws.stats)
 
 
 @njit(cache=True)
-def _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws):
+def _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws, sc):
     """Levenberg-style: a step that raises the error is halved, then refused, and the damping grows;
     so a held target can only settle, never oscillate. Returns ``(cost, accepted)``."""
     x = ws.x
@@ -114,8 +115,8 @@ def _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws):
     while cost > cost0 and tries < 3:
         for i in range(x.shape[0]):
             x[i] *= 0.5
-        _add_clamped(q, x, model.lower, model.upper, ws.q_new)
-        cost = _evaluate(model, targets, root, W, ws.q_new, ws.R_new, ws.p_new, ws.e, ws.err_new, ws.M)
+        _add_clamped(q, x, model.lower, model.upper, sc.q_new)
+        cost = _evaluate(model, targets, root, W, sc.q_new, sc.R_new, sc.p_new, sc.e, sc.err_new, sc.M)
         tries += 1
     if cost > cost0:
         x[:] = 0.0
@@ -138,25 +139,26 @@ def step(model, settings, targets, root, W, q, ws):
     errors. ``ws.x`` (n_dofs,) carries the previous frame's step in (the warm
     start) and this frame's step out; ``ws.lam`` the adaptive damping.
     """
+    sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], False)
     cost0 = effector_errors(ws.R, ws.p, model.effector_frame, targets.position, targets.rotation,
-                            targets.row_weight, ws.e, ws.err, ws.M)
-    ws.err_new[:, :] = ws.err
-    if _finish_errors(targets.row_weight, ws.err_new, settings.position_tolerance, settings.orientation_tolerance):
-        _idle(ws, cost0)
+                            targets.row_weight, sc.e, ws.err, sc.M)
+    sc.err_new[:, :] = ws.err
+    if _finish_errors(targets.row_weight, sc.err_new, settings.position_tolerance, settings.orientation_tolerance):
+        _idle(ws, sc, cost0)
         return
-    linear_system(model, ws.R, ws.p, ws.e, targets.row_weight, ws.A, ws.b, ws.v)
+    linear_system(model, ws.R, ws.p, sc.e, targets.row_weight, sc.A, sc.b, sc.v)
     lam = ws.lam[0] if settings.adaptive_damping else settings.damping
-    _step_solve(model, settings, q, lam, ws)
-    _add_clamped(q, ws.x, model.lower, model.upper, ws.q_new)
-    cost = _evaluate(model, targets, root, W, ws.q_new, ws.R_new, ws.p_new, ws.e, ws.err_new, ws.M)
+    _step_solve(model, settings, q, lam, ws, sc)
+    _add_clamped(q, ws.x, model.lower, model.upper, sc.q_new)
+    cost = _evaluate(model, targets, root, W, sc.q_new, sc.R_new, sc.p_new, sc.e, sc.err_new, sc.M)
     accepted = True
     if settings.adaptive_damping:
-        cost, accepted = _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws)
+        cost, accepted = _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws, sc)
     if accepted:
-        q[:] = ws.q_new
-        ws.R[:, :, :] = ws.R_new
-        ws.p[:, :] = ws.p_new
-        ws.err[:, :] = ws.err_new
+        q[:] = sc.q_new
+        ws.R[:, :, :] = sc.R_new
+        ws.p[:, :] = sc.p_new
+        ws.err[:, :] = sc.err_new
     _step_stats(settings, targets, ws, cost, lam, accepted)
 
 
@@ -182,26 +184,26 @@ def _step_stats(settings, targets, ws, cost, lam, accepted):
 
 
 @njit(cache=True)
-def _damped_try(model, settings, targets, root, W, q, lam, cost, pgs_stats, ws):
+def _damped_try(model, settings, targets, root, W, q, lam, cost, pgs_stats, ws, sc):
     """Raise ``lam`` until a bounded step lowers the cost; take it. Returns ``(cost, lam, accepted, settled, sweeps)``."""
     n = q.shape[0]
-    x = ws.x_solve
+    x = sc.x_solve
     sweeps = 0
     while lam < 1e8:
-        ws.A_damped[:, :] = ws.A
+        sc.A_damped[:, :] = sc.A
         for i in range(n):
-            ws.A_damped[i, i] += lam
+            sc.A_damped[i, i] += lam
         x[:] = 0.0
-        bounded_solve(ws.A_damped, ws.b, x, ws.lo, ws.hi, settings.sweeps, pgs_stats)
+        bounded_solve(sc.A_damped, sc.b, x, sc.lo, sc.hi, settings.sweeps, pgs_stats)
         sweeps += int(pgs_stats[O_SWEEPS])
-        _add_clamped(q, x, model.lower, model.upper, ws.q_new)
-        c = _evaluate(model, targets, root, W, ws.q_new, ws.R_new, ws.p_new, ws.e, ws.err_new, ws.M)
+        _add_clamped(q, x, model.lower, model.upper, sc.q_new)
+        c = _evaluate(model, targets, root, W, sc.q_new, sc.R_new, sc.p_new, sc.e, sc.err_new, sc.M)
         if c < cost:
             settled = cost - c <= settings.settle_tolerance * cost
-            q[:] = ws.q_new
-            ws.R[:, :, :] = ws.R_new
-            ws.p[:, :] = ws.p_new
-            ws.err[:, :] = ws.err_new
+            q[:] = sc.q_new
+            ws.R[:, :, :] = sc.R_new
+            ws.p[:, :] = sc.p_new
+            ws.err[:, :] = sc.err_new
             return c, max(lam * 0.3, 1e-9), True, settled, sweeps
         lam *= 5.0
     return cost, lam, False, False, sweeps
@@ -222,33 +224,34 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     row_w = targets.row_weight
     pos_tol = settings.position_tolerance
     ori_tol = settings.orientation_tolerance
-    x = ws.x_solve
+    sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], True)
+    x = sc.x_solve
     x[:] = 0.0
     pgs_stats = np.zeros(N_STATS)
     lam = max(settings.damping, 1e-3)
-    cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, ws.e, ws.err, ws.M)
+    cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
     total_sweeps = 0
     status = BUDGET_EXHAUSTED
     it = 0
     for it in range(max_iterations + 1):
-        ws.err_new[:, :] = ws.err
-        if _finish_errors(row_w, ws.err_new, pos_tol, ori_tol):
+        sc.err_new[:, :] = ws.err
+        if _finish_errors(row_w, sc.err_new, pos_tol, ori_tol):
             status = CONVERGED
             break
         if it == max_iterations:
             break
-        linear_system(model, ws.R, ws.p, ws.e, row_w, ws.A, ws.b, ws.v)
-        _bounds(q, model.lower, model.upper, settings.max_step, ws.lo, ws.hi)
+        linear_system(model, ws.R, ws.p, sc.e, row_w, sc.A, sc.b, sc.v)
+        _bounds(q, model.lower, model.upper, settings.max_step, sc.lo, sc.hi)
         cost, lam, accepted, settled, sweeps = _damped_try(model, settings, targets, root, W, q, lam, cost,
-                                                           pgs_stats, ws)
+                                                           pgs_stats, ws, sc)
         total_sweeps += sweeps
         if not accepted or settled or math.sqrt(np.sum(x * x)) < settings.stall_tolerance:
             status = STALLED
             break
     # e and err must describe the final q (a refused trial overwrote them).
-    cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, ws.e, ws.err, ws.M)
+    cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
     _finish_errors(row_w, ws.err, pos_tol, ori_tol)
-    if status == STALLED and _finish_errors(row_w, ws.err_new, pos_tol, ori_tol):
+    if status == STALLED and _finish_errors(row_w, sc.err_new, pos_tol, ori_tol):
         status = CONVERGED
     st = ws.stats
     st[O_STATUS] = status
