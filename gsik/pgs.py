@@ -23,14 +23,18 @@ class PgsInfo(NamedTuple):
     update: float
 
 
+def _bound(value, n: int, none: float) -> np.ndarray:
+    """A bound (n,): ``value`` broadcast, or ``none`` everywhere when it is None."""
+    return np.full(n, none) if value is None else np.ascontiguousarray(np.broadcast_to(value, (n,)), dtype=float)
+
+
 def _check(A, b, lower, upper, x0) -> tuple[np.ndarray, ...]:
     A = np.ascontiguousarray(A, dtype=float)
     b = np.ascontiguousarray(b, dtype=float)
     n = b.shape[0] if b.ndim == 1 else -1
     if b.ndim != 1 or A.shape != (n, n):
         raise SolverError(f"PGS needs A of shape (n, n) and b of shape (n,), got {A.shape} and {b.shape}")
-    lo = np.full(n, -np.inf) if lower is None else np.ascontiguousarray(np.broadcast_to(lower, (n,)), dtype=float)
-    hi = np.full(n, np.inf) if upper is None else np.ascontiguousarray(np.broadcast_to(upper, (n,)), dtype=float)
+    lo, hi = _bound(lower, n, -np.inf), _bound(upper, n, np.inf)
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(b))):
         raise SolverError("PGS needs finite A and b")
     if np.any(np.diag(A) <= 0):

@@ -79,17 +79,7 @@ class SolverSettings:
 
     def __post_init__(self):
         for f in fields(self):
-            v = getattr(self, f.name)
-            if f.type in ("bool",):
-                if not isinstance(v, (bool, np.bool_)):
-                    raise SolverError(f"setting {f.name} must be True or False, got {v!r}")
-                continue
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-                raise SolverError(f"setting {f.name} must be a number, got {v!r}")
-            if not math.isfinite(v) or v < 0:
-                raise SolverError(f"setting {f.name} must be finite and >= 0, got {v!r}")
-            if f.type == "int" and int(v) != v:
-                raise SolverError(f"setting {f.name} must be a whole number, got {v!r}")
+            _check_setting(f.name, f.type, getattr(self, f.name))
         for name in ("sweeps", "max_iterations", "solve_sweeps"):
             if getattr(self, name) < 1:
                 raise SolverError(f"setting {name} must be at least 1, got {getattr(self, name)!r}")
@@ -111,6 +101,20 @@ class SolverSettings:
             position_tolerance=float(self.position_tolerance), orientation_tolerance=float(self.orientation_tolerance),
             settle_tolerance=float(self.settle_tolerance), subspace_minimization=bool(self.subspace_minimization),
         )
+
+
+def _check_setting(name: str, kind: str, v) -> None:
+    """One field: a bool, or a finite number >= 0 (whole for an int)."""
+    if kind == "bool":
+        if not isinstance(v, (bool, np.bool_)):
+            raise SolverError(f"setting {name} must be True or False, got {v!r}")
+        return
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+        raise SolverError(f"setting {name} must be a number, got {v!r}")
+    if not math.isfinite(v) or v < 0:
+        raise SolverError(f"setting {name} must be finite and >= 0, got {v!r}")
+    if kind == "int" and int(v) != v:
+        raise SolverError(f"setting {name} must be a whole number, got {v!r}")
 
 
 def setting_names() -> tuple[str, ...]:

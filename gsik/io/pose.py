@@ -76,9 +76,8 @@ _TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only")
 
 
 def _floats(value, n: int, what: str) -> tuple[float, ...]:
-    if isinstance(value, (tuple, list)) and len(value) == n and all(type(v) is float for v in value):
-        if all(math.isfinite(v) for v in value):  # the common case, without NumPy
-            return tuple(value)
+    if _plain_floats(value, n):  # the common case, without NumPy
+        return tuple(value)
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError):
@@ -88,6 +87,12 @@ def _floats(value, n: int, what: str) -> tuple[float, ...]:
     if not np.all(np.isfinite(a)):
         raise PoseError(f"{what} must be finite, got {a.tolist()}")
     return tuple(float(v) for v in a)
+
+
+def _plain_floats(value, n: int) -> bool:
+    """True for a tuple or list of ``n`` finite Python floats."""
+    return (isinstance(value, (tuple, list)) and len(value) == n
+            and all(type(v) is float and math.isfinite(v) for v in value))
 
 
 def _unit_quaternion(value, what: str) -> tuple[float, float, float, float]:
@@ -208,6 +213,11 @@ class _Reader:
     def mapping(self, value, path: tuple, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict:
         if not isinstance(value, dict):
             self.fail(path, f"must be a mapping of {', '.join(required + optional)}, got {_show(value)}")
+        self._keys(value, path, required, optional)
+        return value
+
+    def _keys(self, value: dict, path: tuple, required: tuple[str, ...], optional: tuple[str, ...]) -> None:
+        """Names only, none unknown, none of ``required`` missing."""
         keys = [k for k in value if not isinstance(k, str)]
         if keys:
             self.fail(path, f"keys must be names, got {keys[0]!r}")
@@ -217,7 +227,6 @@ class _Reader:
         missing = [k for k in required if k not in value]
         if missing:
             self.fail(path, f"missing field(s) {choices(missing)}")
-        return value
 
     def number(self, value, path: tuple) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):

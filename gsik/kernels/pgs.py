@@ -126,6 +126,55 @@ def _cholesky_solve(M, r, nf):
 
 
 @njit(cache=True)
+def _free_set(A, b, x, lo, hi, free):
+    """Indices into ``free`` of the unknowns off their bounds or pulled inward by the gradient; returns their count."""
+    nf = 0
+    for i in range(b.shape[0]):
+        g = -b[i]
+        for j in range(b.shape[0]):
+            g += A[i, j] * x[j]
+        if (x[i] > lo[i] and x[i] < hi[i]) or (x[i] <= lo[i] and g < 0.0) or (x[i] >= hi[i] and g > 0.0):
+            free[nf] = i
+            nf += 1
+    return nf
+
+
+@njit(cache=True)
+def _reduced_system(A, b, x, free, nf, is_free, M, r):
+    """``M[:nf, :nf] y = r[:nf]``: the free unknowns' system with the bound ones held at ``x``."""
+    n = b.shape[0]
+    is_free[:] = False
+    for a in range(nf):
+        is_free[free[a]] = True
+    for a in range(nf):
+        i = free[a]
+        v = b[i]
+        for j in range(n):
+            if not is_free[j]:
+                v -= A[i, j] * x[j]
+        r[a] = v
+        for c in range(nf):
+            M[a, c] = A[i, free[c]]
+
+
+@njit(cache=True)
+def _place_free(r, x, lo, hi, free, nf):
+    """Write the free unknowns' solution ``r`` into ``x``, clamped; True if none needed clamping."""
+    inside = True
+    for a in range(nf):
+        i = free[a]
+        v = r[a]
+        if v < lo[i]:
+            v = lo[i]
+            inside = False
+        elif v > hi[i]:
+            v = hi[i]
+            inside = False
+        x[i] = v
+    return inside
+
+
+@njit(cache=True)
 def bounded_solve(A, b, x, lo, hi, sweeps, stats):
     """Minimise ``0.5 x^T A x - b^T x`` with ``lo <= x <= hi``: PGS with subspace minimisation.
 
@@ -143,42 +192,13 @@ def bounded_solve(A, b, x, lo, hi, sweeps, stats):
     M = np.empty((n, n))
     r = np.empty(n)
     for _ in range(8):
-        nf = 0
-        for i in range(n):
-            g = -b[i]
-            for j in range(n):
-                g += A[i, j] * x[j]
-            if (x[i] > lo[i] and x[i] < hi[i]) or (x[i] <= lo[i] and g < 0.0) or (x[i] >= hi[i] and g > 0.0):
-                free[nf] = i
-                nf += 1
+        nf = _free_set(A, b, x, lo, hi, free)
         if nf == 0:
             break
-        is_free[:] = False
-        for a in range(nf):
-            is_free[free[a]] = True
-        for a in range(nf):
-            i = free[a]
-            v = b[i]
-            for j in range(n):
-                if not is_free[j]:
-                    v -= A[i, j] * x[j]
-            r[a] = v
-            for c in range(nf):
-                M[a, c] = A[i, free[c]]
+        _reduced_system(A, b, x, free, nf, is_free, M, r)
         if not _cholesky_solve(M, r, nf):
             break
-        inside = True
-        for a in range(nf):
-            i = free[a]
-            v = r[a]
-            if v < lo[i]:
-                v = lo[i]
-                inside = False
-            elif v > hi[i]:
-                v = hi[i]
-                inside = False
-            x[i] = v
-        if inside:
+        if _place_free(r, x, lo, hi, free, nf):
             break
     projected_gauss_seidel(A, b, x, lo, hi, 3, 0.0, 0.0, x, 0.0, stats)
     stats[O_SWEEPS] = total + int(stats[O_SWEEPS])
