@@ -1,5 +1,6 @@
-"""The built distribution carries its skeleton files (package data) and the studio package, not only the source tree."""
+"""The built distribution carries its skeleton files, the studio package and kernels compiled while it was built."""
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -7,18 +8,25 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def test_built_package_finds_the_bundled_biped(tmp_path):
+def test_built_package_finds_the_bundled_biped_and_starts_without_compiling(tmp_path):
     # Install a non-editable copy (no dependencies: the test environment has them) into a folder of its own,
     # then import it from outside the repository, so the import can only come from that copy.
     target = tmp_path / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps",
-                    "--target", str(target), str(ROOT)], check=True, capture_output=True, text=True)
-    code = ("import gsik, gsik_studio, importlib.resources as r; sk = gsik.load_skeleton('biped'); "
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(target), str(ROOT)],
+                   check=True, capture_output=True, text=True)
+    assert list((target / "gsik" / "__pycache__").glob("*.nbi")), "the build compiled no kernels into the package"
+    code = ("import gsik, gsik_studio, importlib.resources as r; from gsik._warmup import kernel_cache_stats; "
+            "sk = gsik.load_skeleton('biped'); s = gsik.Solver(sk); "
+            "t = {n: gsik.Target.from_transform(T) for n, T in s.effector_poses().items()}; s.step(t); s.solve(t); "
             "print(gsik.__file__); print(gsik_studio.__file__); "
-            "print(r.files('gsik.skeletons').joinpath('biped.yaml').is_file()); print(sk.n_dofs)")
+            "print(r.files('gsik.skeletons').joinpath('biped.yaml').is_file()); print(sk.n_dofs); "
+            "print(*kernel_cache_stats())")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")} | {"HOME": str(tmp_path / "home")}
     out = subprocess.run([sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, {str(target)!r}); {code}"],
-                         cwd=tmp_path, capture_output=True, text=True)
+                         cwd=tmp_path, capture_output=True, text=True, env=env)
     assert out.returncode == 0, out.stderr
-    gsik_path, studio_path, has_file, n_dofs = out.stdout.split()
+    gsik_path, studio_path, has_file, n_dofs, hits, misses = out.stdout.split()
     assert gsik_path.startswith(str(target)) and studio_path.startswith(str(target))
     assert has_file == "True" and n_dofs == "30"
+    # The first start loaded every kernel it ran from the cache the build wrote: nothing compiled.
+    assert int(hits) > 0 and int(misses) == 0, f"cache hits {hits}, misses {misses}"

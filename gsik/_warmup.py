@@ -1,0 +1,58 @@
+"""Compile (and cache) every numba kernel gsik runs, by calling the public API once.
+
+``python -m gsik._warmup`` is what a regular install runs while the package is built (``setup.py``), so that the
+first start after ``pip install`` loads compiled kernels from ``gsik/__pycache__`` instead of compiling for tens of
+seconds. Running it again only loads the cache.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+
+def compile_kernels() -> float:
+    """Run each public entry point that reaches a kernel once; returns the seconds it took."""
+    import gsik
+    from gsik import kinematics, pgs
+
+    start = time.perf_counter()
+    biped = gsik.load_skeleton("biped")
+    for settings in (gsik.SolverSettings(), gsik.SolverSettings.paper()):
+        solver = gsik.Solver(biped, settings=settings)
+        targets = {n: gsik.Target.from_transform(T) for n, T in solver.effector_poses().items()}
+        solver.step(targets)
+        solver.solve(targets)
+        solver.set_root("left_foot")
+    kinematics.jacobian(biped, biped.rest)
+    A = np.eye(3) * 2.0
+    pgs.projected_gauss_seidel(A, np.ones(3), -np.ones(3), np.ones(3))
+    pgs.solve_bounded(A, np.ones(3), -np.ones(3), np.ones(3))
+    return time.perf_counter() - start
+
+
+def kernel_cache_stats() -> tuple[int, int]:
+    """``(hits, misses)`` of numba's on-disk cache over every kernel gsik has loaded in this process."""
+    hits = misses = 0
+    for name, module in list(sys.modules.items()):
+        if name != "gsik" and not name.startswith("gsik."):
+            continue
+        for obj in vars(module).values():
+            stats = getattr(obj, "stats", None)
+            if stats is not None and hasattr(stats, "cache_hits") and getattr(obj, "py_func", None) is not None:
+                hits += sum(stats.cache_hits.values())
+                misses += sum(stats.cache_misses.values())
+    return hits, misses
+
+
+def main() -> int:
+    seconds = compile_kernels()
+    if "--quiet" not in sys.argv:
+        print(f"gsik: kernels compiled and cached in {seconds:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

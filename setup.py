@@ -1,0 +1,29 @@
+"""Build hook: compile gsik's numba kernels while the package is built, so the first start needs no compilation.
+
+Everything else about the package is in pyproject.toml. numba keys its cache on the source's content, the numba
+version and the CPU, so the kernels compiled here (the build runs on the installing machine) are loaded at the first
+start from ``gsik/__pycache__``; anywhere they do not match, numba compiles them as usual.
+"""
+
+import os
+import subprocess
+import sys
+
+from setuptools import setup
+from setuptools.command.build_py import build_py
+
+
+class BuildPyCompilingKernels(build_py):
+    def run(self):
+        super().run()
+        if getattr(self, "editable_mode", False):
+            return  # an editable install compiles into the source tree's cache at first use
+        env = {**os.environ, "PYTHONPATH": os.path.abspath(self.build_lib)}
+        env.pop("NUMBA_CACHE_DIR", None)
+        env.pop("NUMBA_DISABLE_JIT", None)
+        done = subprocess.run([sys.executable, "-m", "gsik._warmup"], env=env, cwd=self.build_lib)
+        if done.returncode != 0:
+            print("warning: gsik's kernels could not be compiled ahead; they will compile at first use", file=sys.stderr)
+
+
+setup(cmdclass={"build_py": BuildPyCompilingKernels})

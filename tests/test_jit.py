@@ -1,0 +1,66 @@
+"""gsik imports and solves wherever it is installed, even where numba's usual cache folders cannot be written."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+# Run in a fresh process: numba picks a cache folder per kernel when the kernel module is imported.
+_SOLVE = """
+import warnings
+warnings.simplefilter("always")
+with warnings.catch_warnings(record=True) as caught:
+    import gsik
+    biped = gsik.load_skeleton("biped")  # forward kinematics compiles one small kernel: quick without a cache
+    T = biped.frame_transforms(biped.rest)
+print(bool(abs(T[biped.frame_of("head"), 2, 3] - 1.6) < 0.2), sum(w.category.__name__ == "KernelCacheWarning" for w in caught))
+print(*[str(w.message) for w in caught if w.category.__name__ == "KernelCacheWarning"], sep="\\n")
+"""
+
+
+def _run(prelude: str, tmp_path, **env) -> list[str]:
+    code = textwrap.dedent(prelude) + _SOLVE
+    environ = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")} | env
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=environ, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout.splitlines()
+
+
+# Pretend that neither the package folder nor the home folder can be written (as for a read-only install run by a
+# service account without a home): numba's own locators then find no place.
+_NO_USUAL_PLACE = """
+from numba.core import caching
+caching.InTreeCacheLocator.from_function = classmethod(lambda cls, f, p: None)
+caching.UserWideCacheLocator.from_function = classmethod(lambda cls, f, p: None)
+"""
+
+
+def test_unwritable_package_and_home_fall_back_to_the_temporary_folder_and_say_so_once(tmp_path):
+    lines = _run(_NO_USUAL_PLACE, tmp_path, TMPDIR=str(tmp_path))
+    assert lines[0] == "True 1"
+    assert str(tmp_path) in lines[1] and "caching compiled kernels" in lines[1]
+    assert list(tmp_path.glob("gsik-numba-cache-*/*/*.nbi")), "nothing was cached in the temporary folder"
+
+
+def test_no_writable_folder_at_all_compiles_without_a_cache_and_says_so_once(tmp_path):
+    # A file where the temporary cache folder would go: even root cannot make that folder.
+    (tmp_path / f"gsik-numba-cache-{os.getuid()}").write_text("")
+    lines = _run(_NO_USUAL_PLACE, tmp_path, TMPDIR=str(tmp_path))
+    assert lines[0] == "True 1"
+    assert "compile at every start" in lines[1]
+
+
+@pytest.mark.skipif(not hasattr(os, "getuid") or os.getuid() == 0, reason="root can write to read-only folders")
+def test_read_only_install_without_home_imports_and_solves(tmp_path):
+    import shutil
+
+    import gsik
+    site = tmp_path / "site"
+    shutil.copytree(os.path.dirname(gsik.__file__), site / "gsik", ignore=shutil.ignore_patterns("__pycache__"))
+    for root, dirs, files in os.walk(site):
+        for name in dirs + files:
+            os.chmod(os.path.join(root, name), 0o555)
+    lines = _run(f"import sys; sys.path.insert(0, {str(site)!r})", tmp_path, HOME="/nonexistent", TMPDIR=str(tmp_path))
+    assert lines[0].startswith("True")
