@@ -14,7 +14,7 @@ def test_built_package_finds_the_bundled_biped_and_starts_without_compiling(tmp_
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(target), str(ROOT)],
                    check=True, capture_output=True, text=True)
-    assert list((target / "gsik" / "__pycache__").glob("*.nbi")), "the build compiled no kernels into the package"
+    assert list((target / "gsik").glob("**/__pycache__/*.nbi")), "the build compiled no kernels into the package"
     code = ("import gsik, gsik_studio, importlib.resources as r; from gsik._warmup import kernel_cache_stats; "
             "sk = gsik.load_skeleton('biped'); s = gsik.Solver(sk); "
             "t = {n: gsik.Target.from_transform(T) for n, T in s.effector_poses().items()}; s.step(t); s.solve(t); "
