@@ -344,7 +344,7 @@ class Solver:
     def _result(self, st: np.ndarray, residual_index: int, attempts: int) -> SolveResult:
         # q and the (2, m) errors share one buffer: one copy, three views the caller owns.
         out = self._state.copy()
-        n, m = self._q.shape[0], self._ws.err.shape[1]
+        n, m = self._q.shape[0], len(self._topo.effector_names)
         stats = st.tolist()
         return SolveResult(out[:n], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]), int(stats[O_SWEEPS]),
                            stats[residual_index], self._topo.effector_names, out[n:n + m], out[n + m:],

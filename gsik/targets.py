@@ -81,8 +81,8 @@ class Target:
 
     def _values(self) -> tuple:
         if self._key is None:
-            object.__setattr__(self, "_key", (tuple(self.position.tolist()), self.orientation, self.weight,
-                                              self.position_only, self.enabled))
+            values = tuple(getattr(self, f) for f in _FIELDS)
+            object.__setattr__(self, "_key", (tuple(self.position.tolist()),) + values[1:])
         return self._key
 
     def __eq__(self, other):
@@ -131,8 +131,7 @@ class Target:
         unknown = sorted(set(changes) - set(_FIELDS))
         if unknown:
             raise TargetError(f"unknown Target field(s) {unknown}; valid: {list(_FIELDS)}")
-        values = dict(zip(_FIELDS, (self.position, self.orientation, self.weight, self.position_only,
-                                    self.enabled)))
+        values = {f: getattr(self, f) for f in _FIELDS if f != "orientation"}  # the quaternion only if needed
         values.update(changes)
         if "orientation" in changes:
             return Target(**values)

@@ -125,7 +125,7 @@ def _cholesky_solve(M, r, nf):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _free_set(A, b, x, lo, hi, free):
     """Indices into ``free`` of the unknowns off their bounds or pulled inward by the gradient; returns their count."""
     nf = 0
@@ -139,7 +139,7 @@ def _free_set(A, b, x, lo, hi, free):
     return nf
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _reduced_system(A, b, x, free, nf, is_free, M, r):
     """``M[:nf, :nf] y = r[:nf]``: the free unknowns' system with the bound ones held at ``x``."""
     n = b.shape[0]
@@ -157,7 +157,7 @@ def _reduced_system(A, b, x, free, nf, is_free, M, r):
             M[a, c] = A[i, free[c]]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _place_free(r, x, lo, hi, free, nf):
     """Write the free unknowns' solution ``r`` into ``x``, clamped; True if none needed clamping."""
     inside = True

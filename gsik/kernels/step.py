@@ -13,8 +13,8 @@ import math
 import numpy as np
 
 from gsik._jit import njit
-from gsik.kernels import (BUDGET_EXHAUSTED, make_scratch, CONVERGED, N_STATS, O_ACCEPTED, O_COST, O_ITERATIONS, O_LAMBDA,
-                          O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, STALLED)
+from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS,
+                          O_STEP_NORM, O_SWEEPS, STALLED, make_scratch)
 from gsik.kernels.kinematics import effector_errors, forward_kinematics, linear_system
 from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
 
@@ -62,7 +62,7 @@ def _bounds(q, lower, upper, max_step, lo, hi):
             hi[i] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _evaluate(model, targets, root, W, q, R, p, e, err, M):
     """Frames ``R``, ``p`` at ``q``, the error vector ``e`` and errors ``err``; returns the weighted cost."""
     forward_kinematics(model, q, root, W, R, p)
@@ -70,7 +70,7 @@ def _evaluate(model, targets, root, W, q, R, p, e, err, M):
                            e, err, M)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _idle(ws, sc, cost):
     """Every target already met: an idle frame costs one error evaluation."""
     ws.err[:, :] = sc.err_new
@@ -81,11 +81,10 @@ def _idle(ws, sc, cost):
     st[O_RESIDUAL] = 0.0
     st[O_COST] = cost
     st[O_STEP_NORM] = 0.0
-    st[O_ACCEPTED] = 1.0
     st[O_STATUS] = CONVERGED
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step_solve(model, settings, q, lam, ws, sc):
     """Solve ``(A + lam I) x = b`` within the limits and the step bound, warm-started from ``ws.x``."""
     n = q.shape[0]
@@ -106,7 +105,7 @@ def _step_solve(model, settings, q, lam, ws, sc):
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, ws.stats)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws, sc):
     """Levenberg-style: a step that raises the error is halved, then refused, and the damping grows;
     so a held target can only settle, never oscillate. Returns ``(cost, accepted)``."""
@@ -159,12 +158,12 @@ def step(model, settings, targets, root, W, q, ws):
         ws.R[:, :, :] = sc.R_new
         ws.p[:, :] = sc.p_new
         ws.err[:, :] = sc.err_new
-    _step_stats(settings, targets, ws, cost, lam, accepted)
+    _step_stats(settings, targets, ws, cost, accepted)
 
 
-@njit(cache=True)
-def _step_stats(settings, targets, ws, cost, lam, accepted):
-    """Cost, step size, damping and status of a step into ``ws.stats``."""
+@njit(cache=True, inline="always")
+def _step_stats(settings, targets, ws, cost, accepted):
+    """Cost, step size and status of a step into ``ws.stats``."""
     step_norm = 0.0
     for i in range(ws.x.shape[0]):
         step_norm += ws.x[i] * ws.x[i]
@@ -172,8 +171,6 @@ def _step_stats(settings, targets, ws, cost, lam, accepted):
     st = ws.stats
     st[O_COST] = cost
     st[O_STEP_NORM] = step_norm
-    st[O_ACCEPTED] = 1.0 if accepted else 0.0
-    st[O_LAMBDA] = lam
     st[O_ITERATIONS] = st[O_SWEEPS]
     if _finish_errors(targets.row_weight, ws.err, settings.position_tolerance, settings.orientation_tolerance):
         st[O_STATUS] = CONVERGED
@@ -183,7 +180,7 @@ def _step_stats(settings, targets, ws, cost, lam, accepted):
         st[O_STATUS] = BUDGET_EXHAUSTED
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _damped_try(model, settings, targets, root, W, q, lam, cost, pgs_stats, ws, sc):
     """Raise ``lam`` until a bounded step lowers the cost; take it. Returns ``(cost, lam, accepted, settled, sweeps)``."""
     n = q.shape[0]
