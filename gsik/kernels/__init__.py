@@ -147,11 +147,6 @@ def make_workspace(n_frames: int, n_dofs: int, n_effectors: int, err: np.ndarray
                      x=np.zeros(n_dofs), lam=np.zeros(1))
 
 
-@njit(cache=True, inline="always")
-def _take(buf, o, size):
-    return buf[o:o + size], o + size
-
-
 @njit(cache=True)
 def make_scratch(n_frames, n, m, for_solve):
     """A :class:`Scratch` (uninitialised) for ``n`` DOFs and ``m`` effectors; ``for_solve`` adds a solve's buffers.
@@ -159,24 +154,15 @@ def make_scratch(n_frames, n, m, for_solve):
     One allocation, cut into the fields: each further allocation would cost as much as the cutting.
     """
     k = n if for_solve else 0
-    buf = np.empty(6 * m + n * n + k * k + 5 * n + k + 12 * n_frames + 2 * m + 9 + 12 * n)
-    A, o = _take(buf, 0, n * n)  # first: the sweeps read it row by row, aligned as allocated
-    A_damped, o = _take(buf, o, k * k)
-    e, o = _take(buf, o, 6 * m)
-    b, o = _take(buf, o, n)
-    lo, o = _take(buf, o, n)
-    hi, o = _take(buf, o, n)
-    x_prev, o = _take(buf, o, n)
-    q_new, o = _take(buf, o, n)
-    x_solve, o = _take(buf, o, k)
-    R_new, o = _take(buf, o, 9 * n_frames)
-    p_new, o = _take(buf, o, 3 * n_frames)
-    err_new, o = _take(buf, o, 2 * m)
-    M, o = _take(buf, o, 9)
-    v, o = _take(buf, o, 12 * n)
-    return Scratch(e, A.reshape((n, n)), A_damped.reshape((k, k)), b, lo, hi, x_prev, q_new, x_solve,
-                   R_new.reshape((n_frames, 3, 3)), p_new.reshape((n_frames, 3)), err_new.reshape((2, m)),
-                   M.reshape((3, 3)), v.reshape((2, n, 6)))
+    sizes = (n * n, k * k, 6 * m, n, n, n, n, n, k, 9 * n_frames, 3 * n_frames, 2 * m, 9, 12 * n)
+    ends = np.cumsum(np.array(sizes))
+    buf = np.empty(ends[-1])
+    A = buf[:ends[0]].reshape((n, n))  # first: the sweeps read it row by row, aligned as allocated
+    return Scratch(buf[ends[1]:ends[2]], A, buf[ends[0]:ends[1]].reshape((k, k)), buf[ends[2]:ends[3]],
+                   buf[ends[3]:ends[4]], buf[ends[4]:ends[5]], buf[ends[5]:ends[6]], buf[ends[6]:ends[7]],
+                   buf[ends[7]:ends[8]], buf[ends[8]:ends[9]].reshape((n_frames, 3, 3)),
+                   buf[ends[9]:ends[10]].reshape((n_frames, 3)), buf[ends[10]:ends[11]].reshape((2, m)),
+                   buf[ends[11]:ends[12]].reshape((3, 3)), buf[ends[12]:ends[13]].reshape((2, n, 6)))
 
 
 def compiled_entry(kernel, *args):

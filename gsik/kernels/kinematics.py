@@ -75,11 +75,14 @@ def forward_kinematics(model, q, root, W, R, p):
 
     A root of -1 leaves the skeleton where its definition puts it.
     """
-    parent = model.frame_parent
-    offset = model.frame_offset
-    rotation = model.frame_rotation
-    axis = model.frame_axis
-    dof = model.frame_dof
+    frames_into(model.frame_parent, model.frame_offset, model.frame_rotation, model.frame_axis, model.frame_dof,
+                q, root, W, R, p)
+
+
+@njit(cache=True)
+def frames_into(parent, offset, rotation, axis, dof, q, root, W, R, p):
+    """:func:`forward_kinematics` on the model's arrays: the form the solver's inner loop calls
+    (a NamedTuple argument is copied and reference-counted field by field on every call)."""
     n = parent.shape[0]
     for i in range(n):
         d = dof[i]

@@ -15,7 +15,7 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, make_scratch)
-from gsik.kernels.kinematics import effector_errors, forward_kinematics, linear_system
+from gsik.kernels.kinematics import effector_errors, frames_into, linear_system
 from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
 
 # With adaptive damping, lam may fall to this fraction of delta while steps succeed: near a
@@ -62,15 +62,16 @@ def _bounds(q, lower, upper, max_step, lo, hi):
             hi[i] = 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _evaluate(model, targets, root, W, q, R, p, e, err, M):
     """Frames ``R``, ``p`` at ``q``, the error vector ``e`` and errors ``err``; returns the weighted cost."""
-    forward_kinematics(model, q, root, W, R, p)
+    frames_into(model.frame_parent, model.frame_offset, model.frame_rotation, model.frame_axis, model.frame_dof,
+                q, root, W, R, p)
     return effector_errors(R, p, model.effector_frame, targets.position, targets.rotation, targets.row_weight,
                            e, err, M)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _idle(ws, sc, cost):
     """Every target already met: an idle frame costs one error evaluation."""
     ws.err[:, :] = sc.err_new
@@ -84,7 +85,7 @@ def _idle(ws, sc, cost):
     st[O_STATUS] = CONVERGED
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _step_solve(model, settings, q, lam, ws, sc):
     """Solve ``(A + lam I) x = b`` within the limits and the step bound, warm-started from ``ws.x``."""
     n = q.shape[0]
@@ -105,7 +106,7 @@ def _step_solve(model, settings, q, lam, ws, sc):
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, ws.stats)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws, sc):
     """Levenberg-style: a step that raises the error is halved, then refused, and the damping grows;
     so a held target can only settle, never oscillate. Returns ``(cost, accepted)``."""
@@ -161,7 +162,7 @@ def step(model, settings, targets, root, W, q, ws):
     _step_stats(settings, targets, ws, cost, accepted)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _step_stats(settings, targets, ws, cost, accepted):
     """Cost, step size and status of a step into ``ws.stats``."""
     step_norm = 0.0
@@ -180,7 +181,7 @@ def _step_stats(settings, targets, ws, cost, accepted):
         st[O_STATUS] = BUDGET_EXHAUSTED
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _damped_try(model, settings, targets, root, W, q, lam, cost, pgs_stats, ws, sc):
     """Raise ``lam`` until a bounded step lowers the cost; take it. Returns ``(cost, lam, accepted, settled, sweeps)``."""
     n = q.shape[0]
