@@ -62,7 +62,7 @@ def _bounds(q, lower, upper, max_step, lo, hi):
             hi[i] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _evaluate(model, targets, root, W, q, R, p, e, err, M):
     """Frames ``R``, ``p`` at ``q``, the error vector ``e`` and errors ``err``; returns the weighted cost."""
     frames_into(model.frame_parent, model.frame_offset, model.frame_rotation, model.frame_axis, model.frame_dof,
@@ -71,7 +71,7 @@ def _evaluate(model, targets, root, W, q, R, p, e, err, M):
                            e, err, M)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _idle(ws, sc, cost):
     """Every target already met: an idle frame costs one error evaluation."""
     ws.err[:, :] = sc.err_new
@@ -85,7 +85,7 @@ def _idle(ws, sc, cost):
     st[O_STATUS] = CONVERGED
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step_solve(model, settings, q, lam, ws, sc):
     """Solve ``(A + lam I) x = b`` within the limits and the step bound, warm-started from ``ws.x``."""
     n = q.shape[0]
@@ -106,7 +106,7 @@ def _step_solve(model, settings, q, lam, ws, sc):
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, ws.stats)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws, sc):
     """Levenberg-style: a step that raises the error is halved, then refused, and the damping grows;
     so a held target can only settle, never oscillate. Returns ``(cost, accepted)``."""
@@ -162,7 +162,7 @@ def step(model, settings, targets, root, W, q, ws):
     _step_stats(settings, targets, ws, cost, accepted)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step_stats(settings, targets, ws, cost, accepted):
     """Cost, step size and status of a step into ``ws.stats``."""
     step_norm = 0.0
@@ -181,7 +181,7 @@ def _step_stats(settings, targets, ws, cost, accepted):
         st[O_STATUS] = BUDGET_EXHAUSTED
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _damped_try(model, settings, targets, root, W, q, lam, cost, pgs_stats, ws, sc):
     """Raise ``lam`` until a bounded step lowers the cost; take it. Returns ``(cost, lam, accepted, settled, sweeps)``."""
     n = q.shape[0]
