@@ -24,12 +24,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik import _kernels
-from gsik._kernels import ADAPTIVE_FLOOR
+from gsik.kernels import kinematics as kernels
+from gsik.kernels.step import ADAPTIVE_FLOOR
 from gsik.errors import SolverError
 from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
     support_polygon
-from gsik.kinematics import topology
+from gsik.kinematics import kinematic_model, topology
 from gsik.priority import Level, posture_level, prioritized_step
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
@@ -166,8 +166,8 @@ class Controller:
         return err[0], err[1]
 
     def _task_errors(self, R, p) -> None:
-        _kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
-                                 self._M)  # same signature in every kernel layout
+        kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
+                                self._M)
 
     def _level_state(self, q, R, p) -> tuple[np.ndarray, np.ndarray]:
         """Cost ``0.5 e^T W e`` per level (in order, the posture's last) and whether each level is met.
@@ -335,22 +335,18 @@ class Controller:
 
 # -- the kernels, in one place ------------------------------------------------------------------
 def _kinematics(skeleton, topo=None):
-    """What :func:`_jacobian` (the frames of ``topo``) and :func:`_forward_kinematics` (no ``topo``) take."""
-    return skeleton, topo
+    """The :class:`~gsik.kernels.KinematicModel` of the frames of ``topo`` (none: forward kinematics only)."""
+    return kinematic_model(skeleton, topo)
 
 
 def _jacobian(model, R, p, J) -> None:
-    """Fill ``J`` (6 m, n_dofs) for the frames of the model's topology."""
-    skeleton, topo = model
-    _kernels.jacobian(R, p, skeleton.frame_axis, skeleton.dof_frame, topo.effector_frame, topo.sign,
-                      topo.effector_dofs, topo.effector_dof_count, J)
+    """Fill ``J`` (6 m, n_dofs) for the effector frames of ``model``."""
+    kernels.jacobian(model, R, p, J)
 
 
 def _forward_kinematics(model, q, root_frame, W, R, p) -> None:
     """World frames into ``R``, ``p`` at ``q``, frame ``root_frame`` pinned at ``W``."""
-    skeleton = model[0]
-    _kernels.forward_kinematics(skeleton.frame_parent, skeleton.frame_offset, skeleton.frame_rotation,
-                                skeleton.frame_axis, skeleton.frame_dof, q, root_frame, W, R, p)
+    kernels.forward_kinematics(model, q, root_frame, W, R, p)
 
 
 def _ordered(tasks) -> list[FrameTask]:
@@ -372,7 +368,7 @@ def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]
         w[:3] = t.weight
         if t.uses_orientation:
             w[3:] = t.weight * orientation_weight
-        rotation = np.eye(3) if t.orientation is None else t.orientation
+        rotation = t.rotation
         tasks.append(FrameTask(name, skeleton.frame_of(name), t.position, rotation, w, t.priority))
     return tasks
 
