@@ -9,8 +9,6 @@ from PySide6 import QtWidgets
 import gsik
 from gsik.anim import scenarios
 from gsik.io.pose import Pose
-from gsik.rotations import transform
-from gsik_studio.model.poses import target_at
 from gsik_studio.widgets import nice
 
 
@@ -42,8 +40,7 @@ def scenario_start(skeleton: gsik.Skeleton, name: str) -> tuple[scenarios.Scenar
     first = scenarios.scenario_pose(sc)
     if sc.n_frames > 1:  # an animated scenario starts at its first frame's targets
         t0 = sc.targets_at(0)
-        first = first.replace(targets={n: target_at(transform(t0[n].orientation, t0[n].position)) if n in t0 else t
-                                       for n, t in first.targets.items()})
+        first = first.replace(targets={n: t0.get(n, t) for n, t in first.targets.items()})
     return sc, first
 
 

@@ -31,17 +31,8 @@ import numpy as np
 
 from gsik import Solver, Target, load_skeleton
 from gsik.balance import signed_distance, support_polygon
-
-LEVEL_0 = ("pelvis", "head", "left_foot")
-
-
-def _pull_targets(solver: Solver, offset, hand_priority: int) -> dict[str, Target]:
-    poses = solver.effector_poses()
-    targets = {n: Target.from_transform(poses[n]) for n in LEVEL_0}
-    hand = poses["left_hand"].copy()
-    hand[:3, 3] += offset
-    targets["left_hand"] = Target.from_transform(hand).replace(priority=hand_priority)
-    return targets
+from gsik.benchmark import HELD_AT_LEVEL_0 as LEVEL_0
+from gsik.benchmark import hand_pull_targets as _pull_targets
 
 
 def priorities(frames: int = 400) -> None:

@@ -13,11 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gsik import _kernels
 from gsik._jit import njit
 from gsik.skeleton import Skeleton
 from gsik.io.skeleton_yaml import load_skeleton
 from gsik.solver import PAPER_METHOD, Solver
+from gsik.kernels.step import step
 from gsik.targets import Target
 
 #: Kenwright (2012), Table 1: one frame step of the biped, C++, Intel i7-2600 [ms].
@@ -55,22 +55,23 @@ class StepTiming:
 
 
 @njit(cache=True)
-def _compiled_steps(model, root, W, tp, tR, rw, q, x, lam, sv, R, p, err, st, work, q0, R0, p0, n, step_too):
+def _compiled_steps(inputs, q0, R0, p0, n, step_too):
     # Restore the start pose before each step so every step does the full work; time the restore alone too.
+    model, settings, targets, root, W, q, ws = inputs
     for _ in range(n):
         q[:] = q0
-        R[:, :, :] = R0
-        p[:, :] = p0
-        x[:] = 0.0
+        ws.R[:, :, :] = R0
+        ws.p[:, :] = p0
+        ws.x[:] = 0.0
         if step_too:
-            _kernels.step(model, root, W, tp, tR, rw, q, x, lam, sv, R, p, err, st, work)
+            step(model, settings, targets, root, W, q, ws)
 
 
 def _compiled_us(solver: Solver, q0: np.ndarray, repeats: int) -> float:
     """Median over blocks of the per-step time inside a compiled loop, minus the restore's time."""
     solver.set_q(q0)
     R0, p0 = solver.world_rotations(), solver.world_positions()
-    args = solver._step_args() + (q0, R0, p0)
+    args = (solver._kernel_inputs()[1], q0, R0, p0)
     per = []
     for _ in range(max(5, repeats // 200)):
         t = time.perf_counter_ns()
@@ -104,7 +105,7 @@ def table_1(skeleton: Skeleton | None = None, repeats: int = 3000, seed: int = 0
             q0 = solver.q
             solver.step()  # compile before timing
 
-            args = solver._step_args()
+            args = solver._kernel_inputs()[1]
             public = np.empty(repeats)
             kernel = np.empty(repeats)
             # Every timed step starts from the same pose (restored untimed), so each does the full work.
@@ -115,7 +116,7 @@ def table_1(skeleton: Skeleton | None = None, repeats: int = 3000, seed: int = 0
                 t_public = time.perf_counter_ns() - t
                 solver.set_q(q0)
                 t = time.perf_counter_ns()
-                _kernels.step(*args)
+                step(*args)  # through numba's type dispatch, as any caller from Python
                 t_kernel = time.perf_counter_ns() - t
                 if i >= 100:  # warm-up
                     public[i - 100], kernel[i - 100] = t_public, t_kernel
@@ -230,7 +231,7 @@ def stability(skeleton: Skeleton | None = None, frames: int = 400) -> list[Stabi
             r = solver.step(targets)
             nan |= not np.all(np.isfinite(r.q))
             changes.append(float(np.abs(r.q - q0).max()))
-        out.append(StabilityResult(method, max(changes[-100:]), r.status.value, nan))
+        out.append(StabilityResult(method, max(changes[-100:]), r.status.label, nan))
     return out
 
 
@@ -263,3 +264,18 @@ def report(repeats: int = 3000, frames: int = 600, problems: int = 1000,
               f"| {100 * r.success:.1f}% | {100 * r.first_attempt:.1f}% | {r.median_ms:.1f} ms | {r.p90_ms:.1f} ms | "
               f"{r.mean_attempts:.2f} |"]
     return "\n".join(lines)
+
+
+#: The effectors held at priority 0 while a hand is pulled out of reach (issue 8's measure).
+HELD_AT_LEVEL_0 = ("pelvis", "head", "left_foot")
+
+
+def hand_pull_targets(solver: Solver, offset, hand_priority: int) -> dict[str, Target]:
+    """Pelvis, head and left foot held where they stand (priority 0); the left hand's target moved by
+    ``offset`` (3,) [m] at ``hand_priority`` (0: today's single level)."""
+    poses = solver.effector_poses()
+    targets = {n: Target.from_transform(poses[n]) for n in HELD_AT_LEVEL_0}
+    hand = poses["left_hand"].copy()
+    hand[:3, 3] += offset
+    targets["left_hand"] = Target.from_transform(hand).replace(priority=hand_priority)
+    return targets

@@ -24,12 +24,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik import _kernels
-from gsik._kernels import ADAPTIVE_FLOOR
+from gsik.kernels import kinematics as kernels
+from gsik.kernels.step import ADAPTIVE_FLOOR
 from gsik.errors import SolverError
 from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
     support_polygon
-from gsik.kinematics import topology
+from gsik.kinematics import kinematic_model, topology
 from gsik.priority import Level, posture_level, prioritized_step
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
@@ -122,14 +122,15 @@ class Controller:
         self._posture = posture
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
-        order = sorted(range(len(tasks)), key=lambda k: tasks[k].priority)
-        self._tasks = [tasks[k] for k in order]
+        self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
+        self._tasks = _ordered(tasks)
+        self.key = structure(skeleton, tasks, posture, balance, settings)
         names = [t.name for t in self._tasks]
         self.names = tuple(names)
         self._topo = topology(skeleton, skeleton.root, names)
-        self._tp = np.array([t.position for t in self._tasks]).reshape(-1, 3)
-        self._tR = np.array([t.rotation for t in self._tasks]).reshape(-1, 3, 3)
-        self._row_w = np.array([t.row_weight for t in self._tasks]).reshape(-1, 6)
+        self._task_model = _kinematics(skeleton, self._topo)
+        self._fk_model = _kinematics(skeleton)
+        self.retarget(tasks)
         priorities = [t.priority for t in self._tasks]
         if balance is not None:
             priorities.append(BALANCE_PRIORITY)
@@ -143,8 +144,17 @@ class Controller:
         self._err = np.zeros((2, m))
         self._M = np.zeros((3, 3))
         if balance is not None:
-            self._mass_topo = topology(skeleton, skeleton.root, [skeleton.frame_names[f] for f in balance.mass.body_frame])
+            bodies = [skeleton.frame_names[f] for f in balance.mass.body_frame]
+            self._mass_kinematics = _kinematics(skeleton, topology(skeleton, skeleton.root, bodies))
             self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
+
+    def retarget(self, tasks) -> None:
+        """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
+        ordered = _ordered(tasks)
+        self._tp = np.array([t.position for t in ordered]).reshape(-1, 3)
+        self._tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
+        self._row_w = np.array([t.row_weight for t in ordered]).reshape(-1, 6)
+        self._state_cache = None
 
     # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -156,8 +166,8 @@ class Controller:
         return err[0], err[1]
 
     def _task_errors(self, R, p) -> None:
-        _kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
-                                 self._M)  # same signature in every kernel layout
+        kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
+                                self._M)
 
     def _level_state(self, q, R, p) -> tuple[np.ndarray, np.ndarray]:
         """Cost ``0.5 e^T W e`` per level (in order, the posture's last) and whether each level is met.
@@ -204,7 +214,7 @@ class Controller:
     def levels(self, q, R, p) -> list[Level]:
         """The linearised levels at ``q`` (frames ``R``, ``p``), in priority order, the posture last."""
         self._task_errors(R, p)
-        _jacobian(self._sk, self._topo, R, p, self._J)
+        _jacobian(self._task_model, R, p, self._J)
         rows = np.repeat(self._task_level, 6)
         weights = self._row_w.reshape(-1)
         out = []
@@ -223,8 +233,7 @@ class Controller:
         n = self._sk.n_dofs
         if signed_distance(goal, com[:2]) <= -BALANCE_BAND:
             return Level(np.zeros((0, n)), np.zeros(0), np.zeros(0))
-        t = self._mass_topo
-        _jacobian(self._sk, t, R, p, self._Jm)
+        _jacobian(self._mass_kinematics, R, p, self._Jm)
         Jc = com_jacobian(self._balance.mass, R, self._Jm)
         return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
 
@@ -235,11 +244,13 @@ class Controller:
         ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
         """
         s = self._settings
-        state0 = self._level_state(q, R, p)
+        cached = self._state_cache
+        fresh = cached is not None and np.array_equal(cached[0], q) and np.array_equal(cached[1], W)
+        state0 = cached[2] if fresh else self._level_state(q, R, p)
         damping = lam[0] if s.adaptive_damping else s.damping
         dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), self._dampings(damping))
         for tries in range(4):
-            verdict, q2, R2, p2 = self._trial(q, q + dq, W, state0, damping)
+            verdict, q2, R2, p2, state = self._trial(q, q + dq, W, state0, damping)
             if verdict != "worse" or not s.adaptive_damping:
                 break
             dq = 0.5 * dq
@@ -247,6 +258,7 @@ class Controller:
         if accepted:
             step_norm = float(np.linalg.norm(q2 - q))
             q[:], R[:], p[:] = q2, R2, p2
+            self._state_cache = (q.copy(), W.copy(), state)
             if s.adaptive_damping:
                 lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
         else:
@@ -254,7 +266,8 @@ class Controller:
             if verdict == "worse":
                 lam[0] = min(damping * 10.0, 1e6)
         held = s.adaptive_damping and (verdict == "same" or (accepted and step_norm <= s.stall_tolerance))
-        return ControlStats(accepted, held, self.converged(R, p), self.target_cost(R, p), step_norm)
+        converged, cost = self._summary(R, p)
+        return ControlStats(accepted, held, converged, cost, step_norm)
 
     def _dampings(self, lam: float) -> np.ndarray:
         """Damping per level: the adaptive one for the targets and balance, the fixed one for the
@@ -274,7 +287,7 @@ class Controller:
         return np.minimum(lo, 0.0), np.maximum(hi, 0.0)
 
     def _trial(self, q, q_try, W, state0, damping):
-        """``(verdict, q, R, p)`` of a trial pose. When a lower level's move breaks a met higher level
+        """``(verdict, q, R, p, level state)`` of a trial pose. When a lower level's move breaks a met higher level
         (the null space is only flat to first order), up to :data:`RESTORING_STEPS` restoring steps of the target levels
         from the trial pose brings it back onto them, and that pose is judged instead."""
         sk = self._sk
@@ -284,16 +297,26 @@ class Controller:
         state = self._level_state(q2, R2, p2)
         verdict = _compare(state0, state, self._settings.settle_tolerance)
         if verdict != "worse" or self._posture is None:
-            return verdict, q2, R2, p2
+            return verdict, q2, R2, p2, state
         q3, R3, p3 = q2.copy(), R2.copy(), p2.copy()
         for _ in range(RESTORING_STEPS):
             levels = self.levels(q3, R3, p3)[:-1]
             q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), damping), sk.lower, sk.upper)
             self._frames(q3, W, R3, p3)
-            restored = _compare(state0, self._level_state(q3, R3, p3), self._settings.settle_tolerance)
+            state3 = self._level_state(q3, R3, p3)
+            restored = _compare(state0, state3, self._settings.settle_tolerance)
             if restored != "worse":
-                return restored, q3, R3, p3
-        return verdict, q2, R2, p2
+                return restored, q3, R3, p3, state3
+        return verdict, q2, R2, p2, state
+
+    def _summary(self, R, p) -> tuple[bool, float]:
+        """``(converged, target cost)`` at frames ``R``, ``p``, from one error evaluation."""
+        s = self._settings
+        self._task_errors(R, p)
+        w = self._row_w
+        missed = ((w[:, 0] > 0.0) & (self._err[0] > s.position_tolerance)) | \
+                 ((w[:, 3] > 0.0) & (self._err[1] > s.orientation_tolerance))
+        return not bool(missed.any()), float(0.5 * (w * self._e.reshape(-1, 6) ** 2).sum())
 
     def target_cost(self, R, p) -> float:
         """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
@@ -307,20 +330,34 @@ class Controller:
         return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
 
     def _frames(self, q, W, R, p) -> None:
-        _forward_kinematics(self._sk, q, self._root, W, R, p)
+        _forward_kinematics(self._fk_model, q, self._root, W, R, p)
 
 
 # -- the kernels, in one place ------------------------------------------------------------------
-def _jacobian(skeleton, topo, R, p, J) -> None:
-    """Fill ``J`` (6 m, n_dofs) for the frames of ``topo`` (a :class:`gsik.kinematics.Topology`)."""
-    _kernels.jacobian(R, p, skeleton.frame_axis, skeleton.dof_frame, topo.effector_frame, topo.sign,
-                      topo.effector_dofs, topo.effector_dof_count, J)
+def _kinematics(skeleton, topo=None):
+    """The :class:`~gsik.kernels.KinematicModel` of the frames of ``topo`` (none: forward kinematics only)."""
+    return kinematic_model(skeleton, topo)
 
 
-def _forward_kinematics(skeleton, q, root_frame, W, R, p) -> None:
+def _jacobian(model, R, p, J) -> None:
+    """Fill ``J`` (6 m, n_dofs) for the effector frames of ``model``."""
+    kernels.jacobian(model, R, p, J)
+
+
+def _forward_kinematics(model, q, root_frame, W, R, p) -> None:
     """World frames into ``R``, ``p`` at ``q``, frame ``root_frame`` pinned at ``W``."""
-    _kernels.forward_kinematics(skeleton.frame_parent, skeleton.frame_offset, skeleton.frame_rotation,
-                                skeleton.frame_axis, skeleton.frame_dof, q, root_frame, W, R, p)
+    kernels.forward_kinematics(model, q, root_frame, W, R, p)
+
+
+def _ordered(tasks) -> list[FrameTask]:
+    """Tasks by priority, then name: one order for building and retargeting."""
+    return sorted(tasks, key=lambda t: (t.priority, t.name))
+
+
+def structure(skeleton, tasks, posture, balance, settings) -> tuple:
+    """What a :class:`Controller` is built for, apart from the target values: equal keys can retarget."""
+    feet = None if balance is None else balance.feet
+    return (skeleton.root, tuple((t.name, t.priority) for t in _ordered(tasks)), id(posture), feet, id(settings))
 
 
 def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]:
@@ -331,7 +368,7 @@ def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]
         w[:3] = t.weight
         if t.uses_orientation:
             w[3:] = t.weight * orientation_weight
-        rotation = np.eye(3) if t.orientation is None else t.orientation
+        rotation = t.rotation
         tasks.append(FrameTask(name, skeleton.frame_of(name), t.position, rotation, w, t.priority))
     return tasks
 

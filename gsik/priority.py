@@ -114,13 +114,14 @@ def _solve_level(J, e, dq, Z, locked, lo, hi, damping):
 
 def _largest_fraction(dq, step, lo, hi) -> tuple[float, int]:
     """The largest ``alpha <= 1`` keeping ``dq + alpha * step`` in the box, and the DOF that blocks (-1: none)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        room = np.where(step > 0, (hi - dq) / step, np.where(step < 0, (lo - dq) / step, np.inf))
-    room = np.maximum(room, 0.0)
-    i = int(np.argmin(room))
-    if room[i] >= 1.0:
+    over = dq + step
+    out = np.flatnonzero((over > hi) | (over < lo))
+    if out.size == 0:
         return 1.0, -1
-    return float(room[i]), i
+    s = step[out]
+    room = np.where(s > 0, hi[out] - dq[out], lo[out] - dq[out]) / s  # s != 0 where dq + s left the box
+    k = int(np.argmin(room))
+    return max(float(room[k]), 0.0), int(out[k])
 
 
 def _without_dof(Z: np.ndarray, dof: int) -> np.ndarray:

@@ -8,17 +8,8 @@ from hypothesis import strategies as st
 import gsik
 from gsik import Solver, Target
 from gsik.balance import signed_distance, support_polygon
-
-LEVEL_0 = ("pelvis", "head", "left_foot")
-
-
-def _pull(solver, offset, hand_priority):
-    poses = solver.effector_poses()
-    targets = {n: Target.from_transform(poses[n]) for n in LEVEL_0}
-    hand = poses["left_hand"].copy()
-    hand[:3, 3] += offset
-    targets["left_hand"] = Target.from_transform(hand).replace(priority=hand_priority)
-    return targets
+from gsik.benchmark import HELD_AT_LEVEL_0 as LEVEL_0
+from gsik.benchmark import hand_pull_targets as _pull
 
 
 def test_target_priority_defaults_to_0_and_must_be_a_whole_number_from_0():

@@ -14,7 +14,7 @@ def test_built_package_finds_the_bundled_biped_and_starts_without_compiling(tmp_
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(target), str(ROOT)],
                    check=True, capture_output=True, text=True)
-    assert list((target / "gsik" / "__pycache__").glob("*.nbi")), "the build compiled no kernels into the package"
+    assert list((target / "gsik").glob("**/__pycache__/*.nbi")), "the build compiled no kernels into the package"
     for package, folder in (("gsik", ROOT / "gsik"), ("gsik_studio", ROOT / "app"), ("gsik/skeletons", ROOT / "skeletons")):
         for source in folder.rglob("*.py"):
             installed = target / package / source.relative_to(folder)

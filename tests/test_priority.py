@@ -19,13 +19,19 @@ problems = st.tuples(st.integers(0, 2**32 - 1), st.integers(3, 12), st.lists(st.
                      st.floats(0.01, 3.0))
 
 
-@settings(max_examples=200, deadline=None)
-@given(problems)
-def test_step_never_leaves_the_box(problem):
+def _problem(problem):
+    """``(rng, n, lo, hi, levels)`` of a drawn problem."""
     seed, n, sizes, width = problem
     rng = np.random.default_rng(seed)
     lo, hi = _box(rng, n, width)
-    levels = _levels(rng, n, sizes) + [posture_level(rng.normal(size=n), rng.normal(size=n), rng.uniform(0, 1, n))]
+    return rng, n, lo, hi, _levels(rng, n, sizes)
+
+
+@settings(max_examples=200, deadline=None)
+@given(problems)
+def test_step_never_leaves_the_box(problem):
+    rng, n, lo, hi, levels = _problem(problem)
+    levels = levels + [posture_level(rng.normal(size=n), rng.normal(size=n), rng.uniform(0, 1, n))]
     dq = prioritized_step(levels, lo, hi, 1e-3)
     assert np.all(dq >= lo) and np.all(dq <= hi)
 
@@ -33,10 +39,7 @@ def test_step_never_leaves_the_box(problem):
 @settings(max_examples=200, deadline=None)
 @given(problems)
 def test_lower_levels_never_change_what_a_higher_level_achieves(problem):
-    seed, n, sizes, width = problem
-    rng = np.random.default_rng(seed)
-    lo, hi = _box(rng, n, width)
-    levels = _levels(rng, n, sizes)
+    _, _, lo, hi, levels = _problem(problem)
     for k in range(len(levels)):
         alone = prioritized_step(levels[: k + 1], lo, hi, 1e-3)
         below = prioritized_step(levels, lo, hi, 1e-3)

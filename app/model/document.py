@@ -24,7 +24,8 @@ import numpy as np
 import gsik
 from gsik.errors import choices
 from gsik.anim.motion import Motion
-from gsik.io.pose import Pose, PoseRead, TargetPose, read_pose, write_pose
+from gsik.io.pose import Pose, PoseRead, read_pose, write_pose
+from gsik.targets import Target
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
 from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
@@ -68,8 +69,7 @@ class Document:
         self.last_result: gsik.SolveResult | None = None
         self.last_solve_time = 0.0  # [s]
         self.needs_solving = True
-        self._targets: dict[str, TargetPose] = {}
-        self._solver_targets: dict[str, tuple[TargetPose, gsik.Target]] = {}
+        self._targets: dict[str, Target] = {}
         self._playback: Playback | None = None
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
         self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
@@ -86,8 +86,8 @@ class Document:
         return self.solver.effector_names
 
     @property
-    def targets(self) -> dict[str, TargetPose]:
-        """``{effector: TargetPose}`` (a new dict; the targets are immutable)."""
+    def targets(self) -> dict[str, Target]:
+        """``{effector: Target}`` (a new dict; the targets are immutable)."""
         return dict(self._targets)
 
     @property
@@ -154,21 +154,11 @@ class Document:
         self.last_result = None
 
     def _push_targets(self) -> None:
-        """Hand the enabled targets to the solver (a gsik.Target is made once per TargetPose)."""
-        cache = self._solver_targets
-        out = {}
-        for n, t in self._targets.items():
-            if not t.enabled:
-                continue
-            hit = cache.get(n)
-            if hit is None or hit[0] is not t:
-                hit = (t, gsik.Target(t.position, t.orientation, weight=t.weight, position_only=t.position_only))
-                cache[n] = hit
-            out[n] = hit[1]
-        self.solver.set_targets(out)
+        """Hand the targets to the solver (it skips the disabled ones)."""
+        self.solver.set_targets(self._targets)
         self.needs_solving = True
 
-    def _snapped_targets(self) -> dict[str, TargetPose]:
+    def _snapped_targets(self) -> dict[str, Target]:
         """Targets moved onto the achieved effector poses, flags kept."""
         return {n: target_at(T, self._targets.get(n)) for n, T in self.solver.effector_poses().items()}
 
@@ -207,14 +197,14 @@ class Document:
         self.events.history.emit()
         self._emit_file(file_state)
 
-    def _effector(self, name: str) -> TargetPose:
+    def _effector(self, name: str) -> Target:
         try:
             return self._targets[name]
         except KeyError:
             why = " (it is the IK root)" if name == self.root else ""
             raise gsik.TargetError(f"no effector {name!r}{why}; effectors: {choices(self._targets)}") from None
 
-    def set_target(self, name: str, target: TargetPose, text: str | None = None,
+    def set_target(self, name: str, target: Target, text: str | None = None,
                    merge_key: object | None = None) -> None:
         """Replace one effector's target (the general form of every target edit).
 
@@ -222,8 +212,8 @@ class Document:
         changed, ``events.options`` when enabled, weight or position-only did.
         """
         self._effector(name)
-        if not isinstance(target, TargetPose):
-            raise gsik.TargetError(f"target for {name!r} must be a TargetPose, got {type(target).__name__}")
+        if not isinstance(target, Target):
+            raise gsik.TargetError(f"target for {name!r} must be a gsik.Target, got {type(target).__name__}")
         old = self._targets[name]
         same_flags = (old.enabled, old.weight, old.position_only) == (target.enabled, target.weight,
                                                                       target.position_only)
@@ -261,9 +251,7 @@ class Document:
 
     def orient_target(self, name: str, orientation, drag: object | None = None) -> None:
         """Set a target's world orientation: quaternion (w, x, y, z) or matrix (3, 3)."""
-        o = np.asarray(orientation, dtype=float)
-        q = quaternion_from_matrix(o) if o.shape == (3, 3) else o
-        t = self._effector(name).replace(orientation=tuple(q))
+        t = self._effector(name).replace(orientation=orientation)  # a matrix is kept as the rotation
         self.set_target(name, t, f"Rotate {name}", None if drag is None else ("rotate", name, drag))
 
     def rotate_target(self, name: str, axis: str, angle: float) -> None:
@@ -272,7 +260,7 @@ class Document:
             raise ValueError(f"axis must be one of {choices(WORLD_AXES)}, got {axis!r}")
         t = self._effector(name)
         R = matrix_from_axis_angle(np.array(WORLD_AXES[axis]), angle) @ t.rotation
-        self.set_target(name, t.replace(orientation=tuple(quaternion_from_matrix(R))),
+        self.set_target(name, t.replace(orientation=R),
                         f"Rotate {name} about {axis}")
 
     def set_target_options(self, name: str, *, enabled: bool | None = None, weight: float | None = None,
@@ -442,7 +430,7 @@ class Document:
         self._replaced(file_state)
 
     # -- playback: frames shown without undo steps, then recorded as one --------
-    def playback(self, frames: Motion | Sequence[Mapping[str, gsik.Target | TargetPose | None]],
+    def playback(self, frames: Motion | Sequence[Mapping[str, Target | None]],
                  text: str = "Play", frame_time: float = 1 / 30) -> Playback:
         """A :class:`Playback` of a :class:`gsik.anim.motion.Motion` or of a sequence of target dicts.
 
@@ -469,7 +457,7 @@ class Document:
         self.needs_solving = False
         self.events.pose.emit()
 
-    def drive_targets(self, frame: Mapping[str, gsik.Target | TargetPose | None]) -> None:
+    def drive_targets(self, frame: Mapping[str, Target | None]) -> None:
         """Show one frame of target dicts (None disables an effector), then step the solver once.
 
         Names that are not effectors of the current root (the root itself) are skipped.
@@ -481,7 +469,7 @@ class Document:
             if t is None:
                 self._targets[name] = old.replace(enabled=False)
             else:
-                self._targets[name] = t if isinstance(t, TargetPose) else driven_target(t, old)
+                self._targets[name] = driven_target(t, old)
         self._push_targets()
         self.step()
         self.events.pose.emit()

@@ -1,7 +1,7 @@
 """Poses as the document keeps them: the root's placement, targets at transforms, the standing pose, checks.
 
-The one place where the studio turns transforms and solver targets into
-:class:`gsik.io.pose.TargetPose` (the pose file's target type).
+The one place where the studio turns transforms and playback frames into
+document targets (:class:`gsik.Target`, the type pose files hold too).
 """
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ import numpy as np
 
 import gsik
 from gsik.errors import PoseError, choices
-from gsik.io.pose import Pose, TargetPose
+from gsik.io.pose import Pose
+from gsik.targets import Target
 from gsik.rotations import quaternion_from_matrix
 
 
@@ -37,20 +38,21 @@ class RootPlacement(NamedTuple):
         return cls(tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])))
 
 
-def target_at(world_from_effector: np.ndarray, like: TargetPose | None = None) -> TargetPose:
+def target_at(world_from_effector: np.ndarray, like: Target | None = None) -> Target:
     """A target at a world transform (4, 4), with the flags of ``like`` (defaults when None)."""
     if like is None:
-        return TargetPose.from_transform(world_from_effector)
-    return TargetPose.from_transform(world_from_effector, like.enabled, like.weight, like.position_only)
+        return Target.from_transform(world_from_effector)
+    return Target.from_transform(world_from_effector, like.weight, like.position_only, like.enabled)
 
 
-def driven_target(t: gsik.Target, old: TargetPose) -> TargetPose:
-    """A playback frame's solver target as a document target (no orientation: keep the old one, position only)."""
-    q = old.orientation if t.orientation is None else tuple(quaternion_from_matrix(t.orientation))
-    return TargetPose(tuple(t.position), q, True, t.weight, t.position_only or t.orientation is None)
+def driven_target(t: Target, old: Target) -> Target:
+    """A playback frame's target as a document target (position only: keep the orientation shown)."""
+    if t.position_only:
+        return old.replace(position=t.position, weight=t.weight, position_only=True, enabled=t.enabled)
+    return t
 
 
-def standing_pose(skeleton: gsik.Skeleton, flags: Mapping[str, TargetPose], position_only: Iterable[str]) -> Pose:
+def standing_pose(skeleton: gsik.Skeleton, flags: Mapping[str, Target], position_only: Iterable[str]) -> Pose:
     """The skeleton's rest pose on its default root, targets on the effectors.
 
     Targets keep the enabled / weight / position-only flags of ``flags`` where it
@@ -60,7 +62,7 @@ def standing_pose(skeleton: gsik.Skeleton, flags: Mapping[str, TargetPose], posi
     targets = {}
     for name, T in solver.effector_poses().items():
         old = flags.get(name)
-        targets[name] = target_at(T, old) if old is not None else TargetPose.from_transform(
+        targets[name] = target_at(T, old) if old is not None else Target.from_transform(
             T, position_only=name in position_only)
     placement = RootPlacement.from_transform(solver.world_from_root)
     return Pose(skeleton.name, skeleton.root, *placement, dict(zip(skeleton.dof_names, skeleton.rest.tolist())),

@@ -12,7 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gsik
-from gsik.io.pose import Pose, PoseRead, TargetPose, pose_from_yaml, pose_to_yaml, read_pose, write_pose
+from gsik import Target
+from gsik.io.pose import Pose, PoseRead, pose_from_yaml, pose_to_yaml, read_pose, write_pose
 from gsik.rotations import quaternion_from_matrix
 
 
@@ -29,7 +30,7 @@ def _pose(skeleton, seed: int = 0) -> Pose:
     W = solver.world_from_root
     targets = {}
     for i, (name, T) in enumerate(solver.effector_poses().items()):
-        targets[name] = TargetPose.from_transform(T, enabled=i != 1, weight=float(rng.uniform(0, 3)),
+        targets[name] = Target.from_transform(T, enabled=i != 1, weight=float(rng.uniform(0, 3)),
                                                   position_only=i == 2)
     return Pose(skeleton.name, solver.root, tuple(W[:3, 3] + rng.normal(0, 0.1, 3)),
                 tuple(quaternion_from_matrix(W[:3, :3])), dict(zip(skeleton.dof_names, q.tolist())), targets)
@@ -82,6 +83,15 @@ def test_any_finite_numbers_round_trip_bit_for_bit(skeleton, position, weight):
     assert [math.copysign(1, v) for v in again.targets["head"].position] == [math.copysign(1, v) for v in position]
 
 
+def test_target_priorities_round_trip_and_are_checked(skeleton):
+    pose = _pose(skeleton)
+    pose = pose.replace(targets={**pose.targets, "left_hand": pose.targets["left_hand"].replace(priority=2)})
+    text = pose_to_yaml(pose)
+    assert text.count("priority:") == 1  # written only where it is not the default
+    assert pose_from_yaml(text, skeleton).pose.targets["left_hand"].priority == 2
+    assert "must be a whole number >= 0, got -1" in _error(text.replace("priority: 2", "priority: -1"), skeleton)
+
+
 def test_written_file_is_readable_and_documented(text, skeleton):
     assert text.startswith("# gsik pose")
     assert "format: 1\n" in text and "skeleton: biped\n" in text
@@ -93,7 +103,7 @@ def test_other_root_round_trips(skeleton):
     solver = gsik.Solver(skeleton)
     solver.set_root("left_foot")
     W = solver.world_from_root
-    targets = {n: TargetPose.from_transform(T) for n, T in solver.effector_poses().items()}
+    targets = {n: Target.from_transform(T) for n, T in solver.effector_poses().items()}
     pose = Pose("biped", "left_foot", tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])),
                 dict(zip(skeleton.dof_names, solver.q.tolist())), targets)
     read = pose_from_yaml(pose_to_yaml(pose), skeleton).pose
@@ -291,12 +301,12 @@ def test_pose_is_immutable(pose):
 
 
 def test_pose_rejects_bad_values():
-    with pytest.raises(gsik.PoseError):
-        TargetPose((0.0, float("nan"), 0.0))
-    with pytest.raises(gsik.PoseError):
-        TargetPose((0.0, 0.0, 0.0), (2.0, 0.0, 0.0, 0.0))
-    with pytest.raises(gsik.PoseError):
-        TargetPose((0.0, 0.0, 0.0), weight=-1.0)
+    with pytest.raises(gsik.TargetError):
+        Target((0.0, float("nan"), 0.0))
+    with pytest.raises(gsik.TargetError):
+        Target((0.0, 0.0, 0.0), (2.0, 0.0, 0.0, 0.0))
+    with pytest.raises(gsik.TargetError):
+        Target((0.0, 0.0, 0.0), weight=-1.0)
     with pytest.raises(gsik.PoseError):
         Pose("biped", "right_foot", (0, 0, 0), (1, 0, 0, 0), {"waist.x": float("inf")}, {})
 
