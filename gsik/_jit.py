@@ -1,7 +1,7 @@
 """numba's ``njit`` with a cache that works wherever gsik is installed, else a no-op decorator.
 
 Kernels are compiled once and cached on disk. The cache goes, in numba's order, to ``$NUMBA_CACHE_DIR``, beside the
-package (``gsik/__pycache__``, where a regular install already holds kernels compiled while it was built: see
+package (the ``__pycache__`` folders in ``gsik/``, where a regular install already holds kernels compiled while it was built: see
 ``setup.py``), or under the user's home. When none of those can be written (a read-only install run by a service
 account without a home), gsik caches in the temporary folder instead, and when even that fails it compiles without a
 cache; either way it says so once, as a :class:`KernelCacheWarning`.
