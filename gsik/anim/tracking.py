@@ -155,13 +155,15 @@ def track_clip(
     progress: Callable[[int, int], None] | None = None,
     **settings,
 ) -> TrackResult:
-    """Track ``motion`` with ``skeleton``: per frame, solve the clip's target poses, warm-started.
+    """Track ``motion`` with ``skeleton``: per frame, solve the clip's target poses.
 
     Frame 0 is solved in full (:meth:`Solver.solve`, from ``q0``); every later
-    frame re-pins the root, sets the new targets (with ``follow_clip``: starts
-    from the clip's pose and prefers it) and takes up to ``steps_per_frame``
-    :meth:`Solver.step` calls (fewer once converged). Only those solver calls are timed; the errors are measured
-    afterwards by forward kinematics of the solved angles.
+    frame re-pins the root, sets the new targets and takes up to
+    ``steps_per_frame`` :meth:`Solver.step` calls (fewer once converged):
+    with ``follow_clip`` from the clip's pose of that frame (none where it
+    already meets every target), else warm-started from the previous frame.
+    Only those solver calls are timed; the errors are measured afterwards by
+    forward kinematics of the solved angles.
 
     Args:
         skeleton: The skeleton that tracks (the clip's own, or another one to
@@ -182,9 +184,11 @@ def track_clip(
         priorities: ``{name: level}`` (0 most important). Default: the
             skeleton's effector sites 0, other joints and sites
             :data:`JOINT_PRIORITY`.
-        follow_clip: Prefer the clip's pose of each frame (DOFs matched by
-            name; the rest pose for the others) and start frame 0 from it.
-        posture_weight: Weight of that preferred posture per DOF (> 0).
+        follow_clip: Start each frame from the clip's pose of that frame
+            (DOFs matched by name; the rest pose for the others) and prefer it
+            (:meth:`Solver.set_posture`, below every target).
+        posture_weight: Weight of that preferred posture per DOF (>= 0; 0:
+            start from it without preferring it).
         q0: Starting angles (n_dofs,) [rad] for frame 0; default the clip's
             pose with ``follow_clip``, else the rest pose.
         progress: Called as ``progress(frames done, n_frames)`` after each frame.
