@@ -31,6 +31,7 @@ from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
 from gsik_studio.model.mirror import mirror_map
 from gsik_studio.model.poses import RootPlacement, check_pose, driven_target, standing_pose, target_at
+from gsik_studio.model.timeline import Timeline
 
 if TYPE_CHECKING:
     from gsik_studio.model.playback import Playback
@@ -74,6 +75,7 @@ class Document:
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
         self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
+        self.timeline = Timeline(self)  # the motion kept with the pose
 
     # -- read-outs -------------------------------------------------------------
     @property
