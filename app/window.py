@@ -28,6 +28,7 @@ from gsik_studio.model import Document, FrameLoop, Playback
 from gsik_studio.qt_compat import protect_none
 from gsik_studio.widgets import nice
 from gsik_studio.widgets.effectors import EffectorsPanel
+from gsik_studio.widgets.library import LibraryPanel
 from gsik_studio.widgets.selected import SelectedTargetPanel
 from gsik_studio.widgets.solver_panel import solver_panel
 from gsik_studio.widgets.status import StatusReadouts
@@ -109,7 +110,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.solver_panel = solver_panel(self.doc, self.settings)
         self.solver_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
         self.solver_panel.restore()
-        for box in (self.effectors, self.selected, self.solver_panel):
+        self.library_panel = LibraryPanel(self.doc, lambda text: self.statusBar().showMessage(text, 6000))
+        for box in (self.effectors, self.selected, self.library_panel, self.solver_panel):
             layout.addWidget(box)
         layout.addStretch(1)
         scroll = QtWidgets.QScrollArea()
