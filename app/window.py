@@ -62,13 +62,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.doc = doc if doc is not None else Document()
         self.loop = FrameLoop(self.doc)
         self.run_timers = run_timers
+        self.others: list[MainWindow] = []  # windows of documents imported from this one
 
         self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
         self.plotter.installEventFilter(self)  # VTK's own key bindings ('e', 'q', 'w', ...) are not wanted
         self.setCentralWidget(self.plotter)
         self.viewport = Viewport(self.plotter, self.doc)
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
-                                 self._show_opened)
+                                 self._show_opened, self.open_document)
         self._make_actions()
         self._make_panel()
         self._make_timeline_bar()
@@ -257,6 +258,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.viewport.render()
 
     # -- commands -----------------------------------------------------------------------------
+    def open_document(self, doc: Document) -> MainWindow:
+        """Show ``doc`` (an imported skeleton) in a new window like this one; returns it."""
+        window = type(self)(doc, settings=self.settings, run_timers=self.run_timers)
+        window.resize(self.size())
+        window.show()
+        self.others.append(window)  # kept alive with this window
+        return window
+
     def set_root(self, name: str) -> None:
         self.doc.set_root(name)
         self.statusBar().showMessage(f"IK root is now the {nice(name)}; the pose stays where it is", 4000)
