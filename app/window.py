@@ -224,6 +224,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _show_root(self) -> None:
         root = self.doc.root
         for a, name in ((self.act_root_left, "left_foot"), (self.act_root_right, "right_foot")):
+            a.setEnabled(name in self.doc.skeleton.frame_names)  # an imported skeleton may have no feet
             with QtCore.QSignalBlocker(a):
                 a.setChecked(root == name)
 

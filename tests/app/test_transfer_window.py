@@ -68,6 +68,7 @@ def test_import_skeleton_from_urdf_opens_a_document_on_it(qtbot, window):
         doc = other.doc
         assert doc.skeleton.name == "mini_humanoid" and doc.root == doc.skeleton.root
         assert set(doc.targets) == set(doc.skeleton.effector_sites) - {doc.root}
+        assert not other.act_root_left.isEnabled() and window.act_root_left.isEnabled()  # no feet to pin
         name = sorted(doc.targets)[0]
         doc.move_target(name, np.array(doc.targets[name].position) + [0.0, 0.0, -0.05])
         qtbot.waitUntil(lambda: not other.timer.isActive(), timeout=20000)
