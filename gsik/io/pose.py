@@ -20,6 +20,7 @@ A pose file is plain YAML, readable and editable by hand::
         enabled: true           # optional, default true: false leaves the effector free
         weight: 1.0             # optional, default 1.0: relative importance, >= 0
         position_only: false    # optional, default false: true ignores the orientation
+        priority: 0             # optional, default 0: strict priority level (0 the most important)
       # ... one entry per effector
 
 Rules:
@@ -59,6 +60,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import yaml
 
+from gsik import validate
 from gsik.errors import PoseError, choices
 from gsik.io.files import atomic_write_text, read_text
 from gsik.rotations import matrix_from_quaternion, transform
@@ -78,27 +80,11 @@ _POSE_KEYS = ("root", "root_transform", "joints", "targets")
 _TOP_KEYS = ("format", "skeleton", *_POSE_KEYS)
 _LIBRARY_KEY = "library"
 _TRANSFORM_KEYS = ("position", "orientation")
-_TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only")
+_TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only", "priority")
 
 
 def _floats(value, n: int, what: str) -> tuple[float, ...]:
-    if _plain_floats(value, n):  # the common case, without NumPy
-        return tuple(value)
-    try:
-        a = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise PoseError(f"{what} must be {n} numbers, got {value!r}") from None
-    if a.shape != (n,):
-        raise PoseError(f"{what} must be {n} numbers, got {value!r}")
-    if not np.all(np.isfinite(a)):
-        raise PoseError(f"{what} must be finite, got {a.tolist()}")
-    return tuple(float(v) for v in a)
-
-
-def _plain_floats(value, n: int) -> bool:
-    """True for a tuple or list of ``n`` finite Python floats."""
-    return (isinstance(value, (tuple, list)) and len(value) == n
-            and all(type(v) is float and math.isfinite(v) for v in value))
+    return validate.vector(value, n, what, PoseError)
 
 
 def _unit_quaternion(value, what: str) -> tuple[float, float, float, float]:
@@ -414,12 +400,16 @@ def _read_target(r: _Reader, value, path: tuple) -> Target:
     weight = r.number(t.get("weight", 1.0), path + ("weight",))
     if weight < 0:
         r.fail(path + ("weight",), f"must be >= 0, got {weight!r}")
+    priority = t.get("priority", 0)
+    if isinstance(priority, bool) or not isinstance(priority, int) or priority < 0:
+        r.fail(path + ("priority",), f"must be a whole number >= 0, got {_show(priority)}")
     return Target(
         position=r.vector(t["position"], 3, path + ("position",)),
         orientation=r.quaternion(t["orientation"], path + ("orientation",)),
         weight=weight,
         position_only=r.flag(t.get("position_only", False), path + ("position_only",)),
         enabled=r.flag(t.get("enabled", True), path + ("enabled",)),
+        priority=priority,
     )
 
 
@@ -478,6 +468,8 @@ def _pose_lines(pose: Pose, indent: str) -> list[str]:
             f"    weight: {_num(t.weight)}",
             f"    position_only: {'true' if t.position_only else 'false'}",
         ]
+        if t.priority:  # written only when set: files of single-level poses stay as they were
+            out.append(f"    priority: {t.priority}")
     return [indent + line for line in out]
 
 
