@@ -140,7 +140,7 @@ class FileActions:
             doc.timeline.load(imported.motion, name)
             window = self._open_document(doc)
             doc.timeline.play()
-            self._message(f"Imported {name} on its own skeleton ({transfer.frame_names_hint(imported.skeleton)})",
+            self._message(f"Imported {name} on its own skeleton ({transfer.describe(imported.skeleton)})",
                           8000)
             return window
         self._stop_playback()
@@ -161,7 +161,7 @@ class FileActions:
         except gsik.GsikError as exc:
             return self._failed(f"Could not import {os.path.basename(path)}: {exc}", "Could not import skeleton",
                                 f"The skeleton could not be loaded; nothing was changed.\n\n{exc}")
-        self._message(f"New document on {transfer.frame_names_hint(skeleton)}", 8000)
+        self._message(f"New document on {transfer.describe(skeleton)}", 8000)
         return self._open_document(doc)
 
     def export_bvh_dialog(self) -> bool:

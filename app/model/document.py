@@ -435,6 +435,7 @@ class Document:
         file_state = self._file_state()
         self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
         self.library.restore(())
+        self.timeline.clear()
         self.history.clear()
         self.path = None
         self._replaced(file_state)

@@ -122,6 +122,13 @@ class Timeline:
         self.events.content.emit()
         self.events.frame.emit()
 
+    def clear(self) -> None:
+        """An empty timeline: no clip, no keys, frame 0 (a new document)."""
+        self.pause()
+        self.clip, self.name, self.frame, self.keys, self._baked = None, "", 0, {}, None
+        self.events.content.emit()
+        self.events.frame.emit()
+
     # -- keys -----------------------------------------------------------------------------
     def _keys_changed(self) -> None:
         self._baked = None

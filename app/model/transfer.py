@@ -77,10 +77,7 @@ def export_bvh(doc: Document, path: str | os.PathLike, units: str = "cm", up: st
     return what
 
 
-def frame_names_hint(skeleton: gsik.Skeleton) -> str:
+def describe(skeleton: gsik.Skeleton) -> str:
     """A short description of a skeleton for messages ("humanoid: 12 DOFs, effectors a, b")."""
     return f"{skeleton.name}: {skeleton.n_dofs} DOFs, effectors {', '.join(skeleton.effector_sites)}"
 
-
-__all__ = ["URDF_SUFFIXES", "document_for", "export_bvh", "export_source", "frame_names_hint", "motion_on",
-           "read_clip", "read_skeleton"]

@@ -183,3 +183,13 @@ def test_keys_refused_while_a_clip_is_loaded(doc):
         doc.timeline.add_key()
     doc.timeline.discard()
     assert doc.timeline.add_key() == 0
+
+
+def test_a_new_document_starts_with_an_empty_timeline(doc):
+    doc.timeline.add_key(0)
+    doc.timeline.add_key(8)
+    doc.new()
+    assert doc.timeline.keys == {} and doc.timeline.clip is None and doc.timeline.n_frames == 1
+    doc.timeline.load(elbow_motion(doc), "Reach")
+    doc.new()
+    assert doc.timeline.clip is None and doc.timeline.motion is None
