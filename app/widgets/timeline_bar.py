@@ -99,7 +99,7 @@ class FrameSlider(QtWidgets.QSlider):
         p.end()
 
 
-#: (name, icon, tooltip, timeline method name or None for the window's own slot)
+#: (name, icon, tooltip) of the bar's buttons, left to right
 BUTTONS = (
     ("play", S.SP_MediaPlay, "Play or pause the timeline"),
     ("stop", S.SP_MediaStop, "Stop and go back to the first frame"),
