@@ -611,15 +611,8 @@ class Solver:
     def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
                         attempts: int) -> SolveResult:
         """A result naming every effector, then the other targeted frames, with their errors."""
-        c = self._make_controller()
-        pos, ori = c.errors(self._ws.R, self._ws.p)
-        names = self._topo.effector_names + tuple(n for n in c.names if n not in self._topo.effector_names)
-        where = {n: k for k, n in enumerate(c.names)}
-        out = np.zeros((2, len(names)))
-        for k, n in enumerate(names):
-            if n in where:
-                out[:, k] = pos[where[n]], ori[where[n]]
-        return SolveResult(self._q.copy(), status, iterations, 0, residual, names, out[0], out[1], step_norm, attempts)
+        names, pos, ori = self._make_controller().report(self._topo.effector_names, self._ws.R, self._ws.p)
+        return SolveResult(self._q.copy(), status, iterations, 0, residual, names, pos, ori, step_norm, attempts)
 
 
 def _posture_precision(weights, n: int) -> np.ndarray:
