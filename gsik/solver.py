@@ -504,19 +504,19 @@ class Solver:
         self._ws.x[:] = 0.0
 
     # -- artist control: priorities, targets on any frame, posture, balance ------------------
-    def set_posture(self, q=None, weights=1.0) -> None:
+    def set_posture(self, q=None, weights=None) -> None:
         """Prefer the pose ``q`` (n_dofs,) [rad] (default: the rest pose), below every target.
 
         The posture is the lowest priority level: it only chooses among the
         poses that meet the targets as well as they can be met, so it never
-        costs target accuracy. ``weights``: a scalar or one per DOF (n_dofs,)
-        (>= 0; 0 turns the posture off), or a symmetric positive semi-definite
+        costs target accuracy. ``weights``: ``None`` (1 for every DOF), a
+        scalar or one per DOF (n_dofs,) (>= 0; 0 turns the posture off), or a symmetric positive semi-definite
         precision matrix (n_dofs, n_dofs); the posture minimises
         ``(q - q_ref)^T P (q - q_ref)`` with ``P = diag(weights)`` or that matrix.
         """
         sk = self._skeleton
         ref = sk.rest.copy() if q is None else np.clip(sk.validate_q(q), sk.lower, sk.upper)
-        P = _posture_precision(weights, sk.n_dofs)
+        P = _posture_precision(1.0 if weights is None else weights, sk.n_dofs)
         self._posture = None if not np.any(P) else control.Posture(ref, P)
         self._pack_targets()
 
