@@ -8,6 +8,7 @@ whose message is bounded and names the source; any other exception is a crash.
 
 from __future__ import annotations
 
+import functools
 import random
 import time
 from collections.abc import Callable
@@ -47,6 +48,7 @@ TOKENS = {
 }
 
 
+@functools.cache
 def seeds() -> dict[str, list[str]]:
     """Valid seed texts for each format."""
     biped = gsik.load_skeleton("biped")
@@ -72,6 +74,7 @@ def _target_pose(world_from_effector):
     return make.from_transform(world_from_effector)
 
 
+@functools.cache
 def readers() -> dict[str, tuple[str, Callable[[str], object]]]:
     """Each reader: (token family, function reading one text the way a user's file is read)."""
     biped = gsik.load_skeleton("biped")
