@@ -31,80 +31,8 @@ from functools import cached_property
 import numpy as np
 
 from gsik.errors import SkeletonError, choices
-from gsik.rotations import is_rotation_matrix
-
-AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
-
-
-def _frozen(a, dtype=float) -> np.ndarray:
-    a = np.array(a, dtype=dtype)
-    a.flags.writeable = False
-    return a
-
-
-@dataclass(frozen=True)
-class RotationSpec:
-    """One one-DOF rotation of a joint.
-
-    Attributes:
-        axis: Unit axis (3,) in the joint's frame.
-        lower: Lower limit [rad].
-        upper: Upper limit [rad].
-        rest: Angle in the standing (rest) pose [rad].
-        label: Short name used in the DOF name (``"x"`` gives ``"left_hip.x"``).
-    """
-
-    axis: tuple[float, float, float]
-    lower: float
-    upper: float
-    rest: float = 0.0
-    label: str = ""
-
-
-@dataclass(frozen=True)
-class JointSpec:
-    """A primary joint: a point on its parent with zero or more rotations.
-
-    Attributes:
-        name: Unique joint name.
-        parent: Parent joint name, ``None`` for the top of the tree.
-        offset: Position (3,) [m] of the joint in its parent's frame at rest.
-        rotations: The one-DOF rotations, applied in order (first is outermost).
-        orientation: Fixed rotation (3, 3) of the joint frame before its
-            rotations (URDF origins need it); identity when ``None``.
-    """
-
-    name: str
-    parent: str | None
-    offset: tuple[float, float, float]
-    rotations: tuple[RotationSpec, ...] = ()
-    orientation: tuple | None = None
-
-
-@dataclass(frozen=True)
-class SiteSpec:
-    """A named frame fixed to a joint: an effector, the root or a bone tip.
-
-    Attributes:
-        name: Unique name (shared namespace with joints).
-        parent: The joint it is fixed to.
-        offset: Position (3,) [m] in the parent joint's frame.
-        orientation: Fixed rotation (3, 3) in the parent joint's frame, or ``None``.
-    """
-
-    name: str
-    parent: str
-    offset: tuple[float, float, float]
-    orientation: tuple | None = None
-
-
-@dataclass(frozen=True)
-class SegmentSpec:
-    """A rigid segment, drawn as bones from one joint or site to one or more others."""
-
-    name: str
-    start: str
-    ends: tuple[str, ...]
+# The raw specs live with their builder; they are part of this module's API.
+from gsik.skeleton_builder import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, SkeletonBuilder
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,11 +128,15 @@ class Skeleton:
                 f"joints: {choices(self.joint_names)}; sites: {choices(self.site_names)}"
             ) from None
 
+    @cached_property
+    def _dof_index(self) -> dict[str, int]:
+        return {n: i for i, n in enumerate(self.dof_names)}
+
     def dof_index(self, name: str) -> int:
         """Index of a DOF by its name ``"joint.label"``."""
         try:
-            return self.dof_names.index(name)
-        except ValueError:
+            return self._dof_index[name]
+        except KeyError:
             raise SkeletonError(
                 f"skeleton {self.name!r} has no degree of freedom {name!r}; valid: {choices(self.dof_names)}"
             ) from None
@@ -261,34 +193,6 @@ class Skeleton:
         return a
 
 
-def _axis_label(axis, k: int) -> str:
-    for label, a in AXES.items():
-        if np.allclose(axis, a):
-            return label
-    return f"r{k}"
-
-
-def _vector(value, what: str) -> tuple[float, float, float]:
-    try:
-        v = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise SkeletonError(f"{what} must be 3 numbers, got {value!r}") from None
-    if v.shape != (3,):
-        raise SkeletonError(f"{what} must be 3 numbers, got {value!r}")
-    if not np.all(np.isfinite(v)):
-        raise SkeletonError(f"{what} must be finite, got {value!r}")
-    return (float(v[0]), float(v[1]), float(v[2]))
-
-
-def _orientation(value, what: str) -> np.ndarray:
-    if value is None:
-        return np.eye(3)
-    R = np.asarray(value, dtype=float)
-    if not is_rotation_matrix(R):
-        raise SkeletonError(f"{what} must be a rotation matrix, got {value!r}")
-    return R
-
-
 def build_skeleton(
     name: str,
     joints: Sequence[JointSpec],
@@ -306,174 +210,17 @@ def build_skeleton(
             with ``lower > upper``, non-finite numbers, zero axes, unknown
             effectors, segment ends or root.
     """
+    b = SkeletonBuilder(source)
+    b.index_joints(joints)
+    b.check_sites(sites)
+    b.order_joints(joints, b.top_joint(joints))
+    for jname in b.order:
+        b.add_joint(b.by_name[jname])
+    b.add_sites(sites)
+    b.add_segments(segments)
+    b.set_effectors(effectors)
+    b.set_root(root)
+    return Skeleton(**b.arrays(name))
 
-    def fail(msg: str):
-        raise SkeletonError(f"{source}: {msg}")
 
-    if not joints:
-        fail("a skeleton needs at least one joint")
-    by_name: dict[str, JointSpec] = {}
-    for j in joints:
-        if not isinstance(j.name, str) or not j.name:
-            fail(f"joint name must be a non-empty string, got {j.name!r}")
-        if j.name in by_name:
-            fail(f"duplicate joint name {j.name!r}")
-        by_name[j.name] = j
-    site_names = [s.name for s in sites]
-    for s in sites:
-        if s.name in by_name or site_names.count(s.name) > 1:
-            fail(f"duplicate name {s.name!r} (joint and site names share one namespace)")
-        if s.parent not in by_name:
-            fail(f"site {s.name!r}: parent {s.parent!r} is not a joint; joints: {choices(by_name)}")
-
-    tops = [j.name for j in joints if j.parent is None]
-    for j in joints:
-        if j.parent is not None and j.parent not in by_name:
-            fail(f"joint {j.name!r}: parent {j.parent!r} is not a joint; joints: {choices(by_name)}")
-    if len(tops) != 1:
-        if not tops:
-            fail("no joint without a parent: the joints form a cycle")
-        fail(f"exactly one joint may have no parent, found {len(tops)}: {choices(tops)}")
-
-    # Topological order, depth first from the top, keeping the file's order among siblings.
-    children: dict[str, list[str]] = {n: [] for n in by_name}
-    for j in joints:
-        if j.parent is not None:
-            children[j.parent].append(j.name)
-    order: list[str] = []
-    stack = [tops[0]]
-    while stack:
-        n = stack.pop()
-        order.append(n)
-        stack.extend(reversed(children[n]))
-    if len(order) != len(joints):
-        cyclic = sorted(set(by_name) - set(order))
-        fail(f"joints {choices(cyclic)} form a cycle (none of them leads back to {tops[0]!r})")
-
-    frame_names: list[str] = []
-    parent: list[int] = []
-    offset: list = []
-    rotation: list = []
-    axis: list = []
-    dof: list[int] = []
-    dof_names: list[str] = []
-    dof_frame: list[int] = []
-    lower: list[float] = []
-    upper: list[float] = []
-    rest: list[float] = []
-    joint_frame: dict[str, int] = {}
-    joint_dofs: dict[str, tuple[int, ...]] = {}
-
-    for jname in order:
-        j = by_name[jname]
-        what = f"joint {jname!r}"
-        p = -1 if j.parent is None else joint_frame[j.parent]
-        off = _vector(j.offset, f"{what} offset")
-        R0 = _orientation(j.orientation, f"{what} orientation")
-        if not j.rotations:
-            frame_names.append(jname)
-            parent.append(p)
-            offset.append(off)
-            rotation.append(R0)
-            axis.append((0.0, 0.0, 0.0))
-            dof.append(-1)
-            joint_frame[jname] = len(frame_names) - 1
-            joint_dofs[jname] = ()
-            continue
-        labels = [r.label or _axis_label(r.axis, k) for k, r in enumerate(j.rotations)]
-        if len(set(labels)) != len(labels):
-            fail(f"{what}: rotations need distinct labels, got {labels}")
-        mine = []
-        for k, (r, label) in enumerate(zip(j.rotations, labels)):
-            a = np.asarray(_vector(r.axis, f"{what} rotation {label} axis"))
-            norm = np.linalg.norm(a)
-            if norm < 1e-9:
-                fail(f"{what} rotation {label}: axis must not be zero")
-            lo, hi, rs = (float(r.lower), float(r.upper), float(r.rest))
-            if not all(np.isfinite(v) for v in (lo, hi, rs)):
-                fail(f"{what} rotation {label}: limits and rest must be finite, got lower={lo}, upper={hi}, rest={rs}")
-            if lo > hi:
-                fail(f"{what} rotation {label}: lower limit {lo} is above upper limit {hi}")
-            if not lo <= rs <= hi:
-                fail(f"{what} rotation {label}: rest angle {rs} is outside the limits [{lo}, {hi}]")
-            frame_names.append(f"{jname}.{label}")
-            parent.append(p if k == 0 else len(frame_names) - 2)
-            offset.append(off if k == 0 else (0.0, 0.0, 0.0))
-            rotation.append(R0 if k == 0 else np.eye(3))
-            axis.append(tuple(a / norm))
-            dof.append(len(dof_names))
-            mine.append(len(dof_names))
-            dof_frame.append(len(frame_names) - 1)
-            dof_names.append(f"{jname}.{label}")
-            lower.append(lo)
-            upper.append(hi)
-            rest.append(rs)
-        joint_frame[jname] = len(frame_names) - 1
-        joint_dofs[jname] = tuple(mine)
-
-    site_frame = []
-    for s in sites:
-        frame_names.append(s.name)
-        parent.append(joint_frame[s.parent])
-        offset.append(_vector(s.offset, f"site {s.name!r} offset"))
-        rotation.append(_orientation(s.orientation, f"site {s.name!r} orientation"))
-        axis.append((0.0, 0.0, 0.0))
-        dof.append(-1)
-        site_frame.append(len(frame_names) - 1)
-
-    index = {n: i for i, n in enumerate(frame_names)}
-    index.update(joint_frame)
-    bones = []
-    bone_segment = []
-    seg_names = []
-    for seg in segments:
-        if seg.name in seg_names:
-            fail(f"duplicate segment name {seg.name!r}")
-        if not seg.ends:
-            fail(f"segment {seg.name!r} needs at least one end")
-        for end in (seg.start, *seg.ends):
-            if end not in index:
-                fail(f"segment {seg.name!r}: {end!r} is not a joint or site; joints: {choices(order)}; "
-                     f"sites: {choices(site_names)}")
-        for end in seg.ends:
-            bones.append((index[seg.start], index[end]))
-            bone_segment.append(len(seg_names))
-        seg_names.append(seg.name)
-
-    effectors = tuple(effectors)
-    for e in effectors:
-        if e not in site_names:
-            fail(f"effector {e!r} is not a site; sites: {choices(site_names)}")
-    if len(set(effectors)) != len(effectors):
-        fail(f"effectors are listed twice: {list(effectors)}")
-    if root is None:
-        root = tops[0]
-    if root not in index:
-        fail(f"root {root!r} is not a joint or site; sites: {choices(site_names)}")
-
-    return Skeleton(
-        name=name,
-        root=root,
-        frame_names=tuple(frame_names),
-        frame_parent=_frozen(parent, np.int64),
-        frame_offset=_frozen(np.reshape(offset, (-1, 3))),
-        frame_rotation=_frozen(np.reshape(rotation, (-1, 3, 3))),
-        frame_axis=_frozen(np.reshape(axis, (-1, 3))),
-        frame_dof=_frozen(dof, np.int64),
-        dof_names=tuple(dof_names),
-        dof_frame=_frozen(dof_frame, np.int64),
-        lower=_frozen(lower),
-        upper=_frozen(upper),
-        rest=_frozen(rest),
-        joint_names=tuple(order),
-        joint_frame=_frozen([joint_frame[n] for n in order], np.int64),
-        joint_parent=_frozen([-1 if by_name[n].parent is None else order.index(by_name[n].parent) for n in order], np.int64),
-        joint_dofs=tuple(joint_dofs[n] for n in order),
-        site_names=tuple(site_names),
-        site_frame=_frozen(site_frame, np.int64),
-        effector_sites=effectors,
-        segment_names=tuple(seg_names),
-        bone_frames=_frozen(np.reshape(bones, (-1, 2)), np.int64),
-        bone_segment=_frozen(bone_segment, np.int64),
-        source=source,
-    )
+__all__ = ["AXES", "JointSpec", "RotationSpec", "SegmentSpec", "SiteSpec", "Skeleton", "build_skeleton"]

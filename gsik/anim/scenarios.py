@@ -6,15 +6,13 @@ joint angles and turned into targets by forward kinematics, so each has an
 exact solution; the ``impossible`` one puts every target far out of reach.
 :func:`random_scenario` makes seeded random poses the same way.
 
-:func:`run_scenario` runs one the way the interactive app does: from the rest
-pose, one warm-started :meth:`Solver.step` per frame, until the solver
-settles; then it keeps stepping for a while and records the largest joint
-change (a settled pose must not creep or oscillate) and whether any NaN
-appeared.
+:func:`gsik.anim.scenario_run.run_scenario` runs one the way the interactive
+app does and measures how the solver settles and holds.
 
 Example:
     >>> import gsik
-    >>> from gsik.anim.scenarios import builtin_scenario, run_scenario
+    >>> from gsik.anim.scenarios import builtin_scenario
+    >>> from gsik.anim.scenario_run import run_scenario
     >>> sk = gsik.load_skeleton("biped")
     >>> report = run_scenario(builtin_scenario(sk, "kneel"))
     >>> report.settled, report.max_position_error < 1e-3
@@ -24,22 +22,18 @@ Example:
 from __future__ import annotations
 
 import math
-import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 
 
+from gsik import validate
 from gsik.errors import ScenarioError, choices
 from gsik.kinematics import world_frames
-from gsik.anim.motion import Motion
 from gsik.io.pose import Pose, TargetPose
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix, transform
 from gsik.skeleton import Skeleton
-from gsik.solver import (Solver, SolverSettings, Status, errors_by_effector, max_orientation_error,
-                         max_position_error)
 from gsik.targets import Target
 
 
@@ -73,9 +67,16 @@ class Scenario:
     frame_time: float = 1.0 / 60.0
 
     def __post_init__(self):
-        P = np.array(self.positions, dtype=float)
-        R = np.array(self.rotations, dtype=float)
-        W = np.array(self.world_from_root, dtype=float)
+        P, R, W = self._checked_arrays()
+        self._check_effectors()
+        object.__setattr__(self, "positions", P)
+        object.__setattr__(self, "rotations", R)
+        object.__setattr__(self, "world_from_root", W)
+        object.__setattr__(self, "effectors", tuple(self.effectors))
+
+    def _checked_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions, rotations and root placement as read-only float arrays of the documented shapes."""
+        P, R, W = (validate.frozen(a) for a in (self.positions, self.rotations, self.world_from_root))
         m = len(self.effectors)
         if P.ndim != 3 or P.shape[1:] != (m, 3) or P.shape[0] < 1:
             raise ScenarioError(f"scenario {self.name!r}: positions must have shape (n_frames, {m}, 3), got {P.shape}")
@@ -84,18 +85,16 @@ class Scenario:
                                 f"got {R.shape}")
         if W.shape != (4, 4):
             raise ScenarioError(f"scenario {self.name!r}: world_from_root must have shape (4, 4), got {W.shape}")
-        if not (np.all(np.isfinite(P)) and np.all(np.isfinite(R)) and np.all(np.isfinite(W))):
+        if not all(np.all(np.isfinite(a)) for a in (P, R, W)):
             raise ScenarioError(f"scenario {self.name!r}: targets must be finite")
+        return P, R, W
+
+    def _check_effectors(self) -> None:
+        effectors = set(self.skeleton.effector_names)
         for e in self.effectors:
-            if e not in self.skeleton.effector_names:
+            if e not in effectors:
                 raise ScenarioError(f"scenario {self.name!r}: {e!r} is not an effector of root "
                                     f"{self.skeleton.root!r}; effectors: {choices(self.skeleton.effector_names)}")
-        for a in (P, R, W):
-            a.flags.writeable = False
-        object.__setattr__(self, "positions", P)
-        object.__setattr__(self, "rotations", R)
-        object.__setattr__(self, "world_from_root", W)
-        object.__setattr__(self, "effectors", tuple(self.effectors))
 
     @property
     def root(self) -> str:
@@ -289,220 +288,6 @@ def builtin_scenario(skeleton: Skeleton, name: str) -> Scenario:
 def builtin_scenarios(skeleton: Skeleton) -> tuple[Scenario, ...]:
     """Every built-in scenario, in :data:`SCENARIO_NAMES` order."""
     return tuple(builtin_scenario(skeleton, n) for n in SCENARIO_NAMES)
-
-
-# -- running them -----------------------------------------------------------------------------
-
-
-class ScenarioReport(NamedTuple):
-    """How the solver did on one scenario (:func:`run_scenario`). Lengths [m], angles [rad].
-
-    Attributes:
-        name: The scenario.
-        root: Its IK root.
-        reachable: Whether its targets can be met.
-        settled: The solver settled within the frame budget.
-        settle_frames: Frames from the last target change to settling (``None`` if it did not).
-        settle_sweeps: Gauss-Seidel sweeps spent until then (all frames, from the rest pose).
-        reach_frames: Frames from the last target change until every effector is within
-            :data:`REACH_TOLERANCE` (``None`` if never: always for an impossible scenario).
-        status: :class:`Status` of the last frame.
-        effector_names: (m,) the effectors, in the order of the error arrays.
-        position_errors: (m,) final distance to each target.
-        orientation_errors: (m,) final angle to each target orientation.
-        tracking_error: Largest position error while the targets moved (0 for a held pose).
-        hold_frames: Frames stepped from settling on (the quiet run and the hold).
-        hold_max_dq: Largest change of any joint angle from one frame to the next after settling.
-        hold_max_move: Largest world displacement of any joint from one frame to the next after settling.
-        finite: No NaN or infinity in any frame.
-        ms_per_frame: Mean wall time per frame [ms] (informative; machines differ).
-        motion: Every frame of the run as a :class:`Motion`.
-    """
-
-    name: str
-    root: str
-    reachable: bool
-    settled: bool
-    settle_frames: int | None
-    settle_sweeps: int
-    reach_frames: int | None
-    status: Status
-    effector_names: tuple[str, ...]
-    position_errors: np.ndarray
-    orientation_errors: np.ndarray
-    tracking_error: float
-    hold_frames: int
-    hold_max_dq: float
-    hold_max_move: float
-    finite: bool
-    ms_per_frame: float
-    motion: Motion
-
-    max_position_error = property(lambda self: max_position_error(self),
-                                  doc="Largest final position error [m].")
-    max_orientation_error = property(lambda self: max_orientation_error(self),
-                                     doc="Largest final orientation error [rad].")
-
-    def errors(self) -> dict[str, tuple[float, float]]:
-        """``{effector: (position error [m], orientation error [rad])}``."""
-        return errors_by_effector(self)
-
-
-_SETTLED = (Status.CONVERGED, Status.STALLED)
-#: "Visually there": every effector within 1 mm and 1 degree of its target.
-REACH_TOLERANCE = (1e-3, math.radians(1.0))
-
-
-def run_scenario(
-    scenario: Scenario,
-    settings: SolverSettings | None = None,
-    *,
-    max_frames: int = 600,
-    hold_frames: int = 60,
-    quiet_frames: int = 10,
-    progress: Callable[[int, int], None] | None = None,
-    **overrides,
-) -> ScenarioReport:
-    """Run a scenario like the interactive app: one warm-started step per frame from the rest pose.
-
-    The targets are set at frame 0 (a jump from the rest pose, the hardest
-    case) and follow the scenario's animation, if any. The solver has
-    settled at the first frame that starts ``quiet_frames`` frames in a row
-    whose step reports converged or stalled (best reach), counted from the
-    last target change. It then keeps stepping ``hold_frames`` more frames,
-    and the largest change of the pose from frame to frame over the quiet and
-    hold frames is recorded: a stable solver keeps it at zero. A run that
-    does not settle within ``max_frames`` is watched the same way over the
-    frames that follow.
-
-    Args:
-        scenario: The scenario.
-        settings: Solver settings (default :class:`SolverSettings()`);
-            keyword ``overrides`` change fields of it.
-        max_frames: Frame budget after the targets stop moving.
-        hold_frames: Frames stepped after settling.
-        quiet_frames: Consecutive settled frames that count as settled.
-        progress: Called as ``progress(frames_done, frames_at_most)`` after each frame.
-
-    Raises:
-        ScenarioError: a frame count below 1.
-        SolverError: bad solver settings.
-    """
-    for what, v in (("max_frames", max_frames), ("hold_frames", hold_frames), ("quiet_frames", quiet_frames)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-            raise ScenarioError(f"{what} must be a whole number >= 1, got {v!r}")
-    sk = scenario.skeleton
-    solver = Solver(sk, world_from_root=scenario.world_from_root, settings=settings, **overrides)
-    last_change = scenario.n_frames - 1
-    limit = last_change + max_frames + quiet_frames + hold_frames  # frames to run at most
-    qs = [solver.q]  # qs[k + 1] is the pose after frame k
-    sweeps = [0]
-    tracking = 0.0
-    reached_at = None  # first frame within REACH_TOLERANCE, after the last target change
-    settled_at = None  # first frame of the quiet run
-    hold_from = None  # the frame from which the pose is watched for changes
-    quiet = 0
-    start = time.perf_counter()
-    i = 0
-    while i < limit:
-        if i < scenario.n_frames:
-            solver.set_targets(scenario.targets_at(i))
-        result = solver.step()
-        qs.append(result.q)
-        sweeps.append(result.sweeps)
-        if i < last_change:
-            tracking = max(tracking, result.max_position_error)
-        elif hold_from is None:
-            if reached_at is None and result.max_position_error <= REACH_TOLERANCE[0] \
-                    and result.max_orientation_error <= REACH_TOLERANCE[1]:
-                reached_at = i
-            quiet = quiet + 1 if result.status in _SETTLED else 0
-            if quiet == quiet_frames:
-                settled_at = hold_from = i - quiet_frames + 1
-            elif i - last_change + 1 >= max_frames:
-                hold_from = i + 1 - quiet_frames  # never settled: watch the frames that follow all the same
-            if hold_from is not None:
-                limit = hold_from + quiet_frames + hold_frames
-        i += 1
-        if progress is not None:
-            progress(i, limit)
-    elapsed = time.perf_counter() - start
-    n_run = i
-    Q = np.array(qs)
-    settled = settled_at is not None
-    hold = Q[hold_from + 1:]
-    dq = np.abs(np.diff(hold, axis=0))
-    W = np.tile(scenario.world_from_root, (Q.shape[0], 1, 1))
-    finite = bool(np.all(np.isfinite(Q)))
-    motion = Motion(sk, Q, (sk.root,) * Q.shape[0], W, scenario.frame_time)
-    if finite and hold.shape[0] > 1:
-        points = np.concatenate([sk.joint_frame, sk.site_frame])
-        P = np.stack([world_frames(sk, q, scenario.world_from_root, sk.root)[1][points] for q in hold])
-        move = float(np.linalg.norm(np.diff(P, axis=0), axis=2).max())
-    else:
-        move = 0.0 if finite else math.inf
-    return ScenarioReport(
-        name=scenario.name,
-        root=sk.root,
-        reachable=scenario.reachable,
-        settled=settled,
-        settle_frames=(settled_at - last_change) if settled else None,
-        settle_sweeps=int(sum(sweeps[: settled_at + 2])) if settled else int(sum(sweeps)),
-        reach_frames=None if reached_at is None else reached_at - last_change,
-        status=result.status,
-        effector_names=result.effector_names,
-        position_errors=result.position_errors,
-        orientation_errors=result.orientation_errors,
-        tracking_error=float(tracking),
-        hold_frames=hold.shape[0],
-        hold_max_dq=float(dq.max(initial=0.0)) if finite else math.inf,
-        hold_max_move=move,
-        finite=finite,
-        ms_per_frame=1e3 * elapsed / n_run,
-        motion=motion,
-    )
-
-
-def run_scenarios(scenarios: Sequence[Scenario], settings: SolverSettings | None = None,
-                  progress: Callable[[int, int], None] | None = None, **kwargs) -> list[ScenarioReport]:
-    """:func:`run_scenario` on each; ``progress(scenarios_done, n_scenarios)`` after each."""
-    reports = []
-    for k, s in enumerate(scenarios):
-        reports.append(run_scenario(s, settings, **kwargs))
-        if progress is not None:
-            progress(k + 1, len(scenarios))
-    return reports
-
-
-def format_table(reports: Sequence[ScenarioReport]) -> str:
-    """The reports as a plain-text table, one row per scenario."""
-    header = ("scenario", "root", "status", "settled", "frames", "sweeps", "to 1 mm", "track mm", "pos err mm",
-              "ori err deg", "max dq after rad", "max move after m", "NaN")
-    rows = [header]
-    for r in reports:
-        rows.append((
-            r.name,
-            r.root,
-            r.status.value,
-            "yes" if r.settled else "NO",
-            "-" if r.settle_frames is None else str(r.settle_frames),
-            str(r.settle_sweeps),
-            "-" if r.reach_frames is None else str(r.reach_frames),
-            f"{r.tracking_error * 1e3:.2f}" if r.tracking_error else "-",
-            f"{r.max_position_error * 1e3:.3f}",
-            f"{math.degrees(r.max_orientation_error):.3f}",
-            f"{r.hold_max_dq:.1e}",
-            f"{r.hold_max_move:.1e}",
-            "none" if r.finite else "YES",
-        ))
-    widths = [max(len(row[c]) for row in rows) for c in range(len(header))]
-    lines = []
-    for k, row in enumerate(rows):
-        cells = [cell.ljust(w) if c < 4 else cell.rjust(w) for c, (cell, w) in enumerate(zip(row, widths))]
-        lines.append("  ".join(cells).rstrip())
-        if k == 0:
-            lines.append("  ".join("-" * w for w in widths))
-    return "\n".join(lines)
 
 
 def scenario_pose(scenario: Scenario, q: np.ndarray | None = None) -> Pose:

@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from gsik import validate
 from gsik.errors import SkeletonError, SolverError, choices
 from gsik.kinematics import world_frames
 from gsik.anim.motion import Motion
@@ -147,38 +148,75 @@ def track_clip(
         SolverError: an unknown effector or root (listing the valid names), a
             clip without frames, or a bad setting.
     """
+    _check_inputs(skeleton, motion, steps_per_frame)
+    root = skeleton.root if root is None else root
+    skeleton.frame_of(root)
+    root_in_clip = _clip_frame(motion.skeleton, root, "the root")
+    pairs = _effector_pairs(skeleton, motion.skeleton, effectors, root)
+    names = tuple(pairs)
+    clip_frames = [_clip_frame(motion.skeleton, pairs[n], f"effector {n!r}") for n in names]
+    clip = _clip_targets(motion, root_in_clip, names, clip_frames, position_only)
+    solver = Solver(skeleton.with_root(root), q0=q0, world_from_root=clip.world_from_root[0], sweeps=sweeps,
+                    **settings)
+    Q, seconds, steps, statuses = _follow(solver, clip, steps_per_frame)
+    eff_frames = np.array([skeleton.frame_of(n) for n in names], dtype=np.int64)
+    pos, ori = _errors(skeleton, root, Q, clip, eff_frames, position_only)
+    for a in (pos, ori, seconds, steps):
+        a.flags.writeable = False
+    solved = Motion(skeleton, Q, (root,) * motion.n_frames, clip.world_from_root, motion.frame_time)
+    return TrackResult(solved, names, pos, ori, seconds, steps, tuple(statuses))
+
+
+def _check_inputs(skeleton: Skeleton, motion: Motion, steps_per_frame: int) -> None:
     if not isinstance(skeleton, Skeleton):
         raise SolverError(f"track_clip needs a Skeleton, got {type(skeleton).__name__}")
     if not isinstance(motion, Motion):
         raise SolverError(f"track_clip needs a gsik.anim.motion.Motion, got {type(motion).__name__}")
-    if isinstance(steps_per_frame, bool) or not isinstance(steps_per_frame, (int, np.integer)) or steps_per_frame < 1:
-        raise SolverError(f"steps_per_frame must be a whole number >= 1, got {steps_per_frame!r}")
+    validate.whole(steps_per_frame, "steps_per_frame", SolverError, 1)
     if motion.n_frames == 0:
         raise SolverError("cannot track a clip with no frames")
-    clip_sk = motion.skeleton
-    root = skeleton.root if root is None else root
-    skeleton.frame_of(root)
-    root_in_clip = _clip_frame(clip_sk, root, "the root")
+
+
+def _effector_pairs(skeleton: Skeleton, clip_sk: Skeleton, effectors, root: str) -> dict[str, str]:
+    """``{effector of skeleton: clip joint or site it follows}``, the root left out (it is pinned)."""
     available = [n for n in skeleton.effector_sites if n != root]
-    if effectors is None:
-        pairs = {n: n for n in available if n in clip_sk.site_names or n in clip_sk.joint_names}
-        if not pairs:
-            raise SolverError(f"the clip has none of the skeleton's effectors {choices(available)}; "
-                              "name them with effectors={effector: clip name}")
-    elif isinstance(effectors, Mapping):
-        pairs = dict(effectors)
-    else:
-        pairs = {n: n for n in ([effectors] if isinstance(effectors, str) else effectors)}
+    pairs = _requested_pairs(clip_sk, effectors, available)
     pairs.pop(root, None)  # pinned where the clip has it: tracked exactly
+    allowed = set(available)
     for name in pairs:
-        if name not in available:
+        if name not in allowed:
             raise SolverError(f"{name!r} is not an effector of skeleton {skeleton.name!r}; "
                               f"effectors: {choices(available)}")
-    names = tuple(pairs)
-    clip_frames = [_clip_frame(clip_sk, pairs[n], f"effector {n!r}") for n in names]
-    eff_frames = np.array([skeleton.frame_of(n) for n in names], dtype=np.int64)
+    return pairs
 
-    # Targets and root poses from the clip's own forward kinematics.
+
+def _requested_pairs(clip_sk: Skeleton, effectors, available: list[str]) -> dict[str, str]:
+    """The pairs as asked: a mapping, names (or one name) followed by the same name, or every shared effector."""
+    if isinstance(effectors, Mapping):
+        return dict(effectors)
+    if effectors is not None:
+        return {n: n for n in ([effectors] if isinstance(effectors, str) else effectors)}
+    in_clip = set(clip_sk.site_names) | set(clip_sk.joint_names)
+    pairs = {n: n for n in available if n in in_clip}
+    if not pairs:
+        raise SolverError(f"the clip has none of the skeleton's effectors {choices(available)}; "
+                          "name them with effectors={effector: clip name}")
+    return pairs
+
+
+class _ClipTargets(NamedTuple):
+    """What the clip asks for, per frame: root pose (F, 4, 4), targets, their positions (F, m, 3) [m] and
+    orientations (F, m, 3, 3)."""
+
+    world_from_root: np.ndarray
+    targets: list[dict[str, Target]]
+    positions: np.ndarray
+    rotations: np.ndarray
+
+
+def _clip_targets(motion: Motion, root_in_clip: int, names: tuple[str, ...], clip_frames: list[int],
+                  position_only: bool) -> _ClipTargets:
+    """Targets and root poses from the clip's own forward kinematics."""
     F = motion.n_frames
     W = np.empty((F, 4, 4))
     targets: list[dict[str, Target]] = []
@@ -190,20 +228,27 @@ def track_clip(
         target_p[f] = p[clip_frames]
         target_R[f] = R[clip_frames]
         targets.append({n: Target(p[c], None if position_only else R[c]) for n, c in zip(names, clip_frames)})
+    return _ClipTargets(W, targets, target_p, target_R)
 
-    solver = Solver(skeleton.with_root(root), q0=q0, world_from_root=W[0], sweeps=sweeps, **settings)
-    Q = np.empty((F, skeleton.n_dofs))
+
+def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int):
+    """Solve frame 0 in full, then warm-started steps per frame; only the solver calls are timed.
+
+    Returns ``(Q (F, n_dofs) [rad], seconds (F,), steps (F,), statuses)``.
+    """
+    F = len(clip.targets)
+    Q = np.empty((F, solver.skeleton.n_dofs))
     seconds = np.empty(F)
     steps = np.zeros(F, dtype=np.int64)
     statuses: list[Status] = []
     for f in range(F):
         start = time.perf_counter()
         if f == 0:
-            result = solver.solve(targets[0])
+            result = solver.solve(clip.targets[0])
             steps[f] = result.iterations
         else:
-            solver.set_world_from_root(W[f])
-            solver.set_targets(targets[f])
+            solver.set_world_from_root(clip.world_from_root[f])
+            solver.set_targets(clip.targets[f])
             for k in range(steps_per_frame):
                 result = solver.step()
                 steps[f] = k + 1
@@ -212,19 +257,22 @@ def track_clip(
         seconds[f] = time.perf_counter() - start
         Q[f] = result.q
         statuses.append(result.status)
+    return Q, seconds, steps, statuses
 
-    pos = np.empty((F, len(names)))
-    ori = np.zeros((F, len(names)))
+
+def _errors(skeleton: Skeleton, root: str, Q: np.ndarray, clip: _ClipTargets, eff_frames: np.ndarray,
+            position_only: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Distance (F, m) [m] and angle (F, m) [rad] of each effector to its target, by forward kinematics."""
+    F, m = clip.positions.shape[:2]
+    pos = np.empty((F, m))
+    ori = np.zeros((F, m))
     for f in range(F):
-        R, p = world_frames(skeleton, Q[f], W[f], root)
-        pos[f] = np.linalg.norm(p[eff_frames] - target_p[f], axis=1)
+        R, p = world_frames(skeleton, Q[f], clip.world_from_root[f], root)
+        pos[f] = np.linalg.norm(p[eff_frames] - clip.positions[f], axis=1)
         if not position_only:
-            cos = (np.einsum("kij,kij->k", R[eff_frames], target_R[f]) - 1.0) * 0.5
+            cos = (np.einsum("kij,kij->k", R[eff_frames], clip.rotations[f]) - 1.0) * 0.5
             ori[f] = np.arccos(np.clip(cos, -1.0, 1.0))
-    for a in (pos, ori, seconds, steps):
-        a.flags.writeable = False
-    solved = Motion(skeleton, Q, (root,) * F, W, motion.frame_time)
-    return TrackResult(solved, names, pos, ori, seconds, steps, tuple(statuses))
+    return pos, ori
 
 
 __all__ = ["TrackResult", "TrackSummary", "track_clip"]

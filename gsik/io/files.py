@@ -1,4 +1,4 @@
-"""Safe file writing shared by every format gsik saves (poses, BVH, skeletons)."""
+"""File reading and safe writing shared by every format gsik loads and saves (poses, BVH, URDF, skeletons)."""
 
 from __future__ import annotations
 
@@ -9,14 +9,35 @@ import stat
 from gsik.errors import GsikFileError
 
 
-def read_text(path: str | os.PathLike, what: str = "file") -> str:
-    """Read a UTF-8 text file, or raise :class:`GsikFileError` naming it and the reason."""
+def read_bytes(path: str | os.PathLike, what: str = "file") -> bytes:
+    """The bytes of a file, or :class:`GsikFileError` naming ``what``, the path and the reason."""
     try:
-        with open(path, encoding="utf-8", newline="") as f:
+        with open(path, "rb") as f:
             return f.read()
     except OSError as exc:
         raise file_error(f"cannot read {what}", path, exc) from exc
+
+
+def read_text(path: str | os.PathLike, what: str = "file", encoding: str = "utf-8",
+              fallback: str | None = None) -> str:
+    """The text of a file, line ends kept as written; every format reads through here.
+
+    Args:
+        path: The file.
+        what: What the file is, for the message (``"pose file"``).
+        encoding: Tried first (``"utf-8-sig"`` also drops a byte-order mark).
+        fallback: Tried when ``encoding`` fails (``"latin-1"`` decodes every byte);
+            ``None`` makes undecodable text an error.
+
+    Raises:
+        GsikFileError: the file cannot be read or decoded, naming it and the reason.
+    """
+    data = read_bytes(path, what)
+    try:
+        return data.decode(encoding)
     except UnicodeDecodeError as exc:
+        if fallback is not None:
+            return data.decode(fallback)
         raise GsikFileError(f"cannot read {what} {os.fspath(path)!r}: not UTF-8 text ({exc.reason})") from None
 
 

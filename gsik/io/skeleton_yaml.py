@@ -6,10 +6,11 @@ import os
 from importlib import resources
 from pathlib import Path
 
-import numpy as np
 import yaml
 
-from gsik.errors import SkeletonError, choices
+from gsik.errors import GsikFileError, SkeletonError, choices
+from gsik import validate
+from gsik.io.files import read_text
 from gsik.rotations import matrix_from_quaternion
 from gsik.skeleton import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
 
@@ -42,11 +43,9 @@ def load_skeleton(name_or_path: str | os.PathLike) -> Skeleton:
             raise SkeletonError(f"no bundled skeleton {s!r}; bundled: {choices(bundled)} (or give a path to a .yaml file)")
         path = _bundled_dir() / f"{s}.yaml"
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SkeletonError(f"cannot read skeleton file {str(path)!r}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise SkeletonError(f"{path}: not a UTF-8 text file ({exc.reason})") from None
+        text = read_text(path, "skeleton file")
+    except GsikFileError as exc:  # a skeleton that cannot be loaded is a SkeletonError, whatever the cause
+        raise SkeletonError(str(exc)) from None
     return skeleton_from_yaml(text, source=str(path))
 
 
@@ -87,20 +86,21 @@ class _Fields:
             return default
         return self.data[key]
 
+    def checked(self, check, *args):
+        """``check(*args, SkeletonError)`` from :mod:`gsik.validate`, its error naming this place."""
+        try:
+            return check(*args, SkeletonError)
+        except SkeletonError as exc:
+            self.fail(str(exc))
+
     def name(self, key: str = "name", default=...) -> str | None:
         v = self.get(key, default)
         if v is None and default is None:
             return None
-        if not isinstance(v, str) or not v.strip():
-            self.fail(f"{key} must be a non-empty string, got {v!r}")
-        return v
+        return self.checked(validate.name, v, key)
 
     def number(self, value, what: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(f"{what} must be a number, got {value!r}")
-        if not np.isfinite(value):
-            self.fail(f"{what} must be finite, got {value!r}")
-        return float(value)
+        return self.checked(validate.number, value, what)
 
     def vector(self, key: str, n: int = 3, default=...) -> tuple[float, ...]:
         v = self.get(key, default)
@@ -111,13 +111,11 @@ class _Fields:
         return tuple(self.number(x, f"{key}[{i}]") for i, x in enumerate(v))
 
     def orientation(self, key: str = "orientation"):
-        q = self.vector(key, 4, default=None)
+        q = self.get(key, None)
         if q is None:
             return None
-        norm = float(np.linalg.norm(q))
-        if abs(norm - 1.0) > 1e-3:
-            self.fail(f"{key} must be a unit quaternion [w, x, y, z], got norm {norm:.6g}")
-        return matrix_from_quaternion(np.asarray(q) / norm)
+        self.vector(key, 4)
+        return matrix_from_quaternion(self.checked(validate.unit_quaternion, q, key))
 
 
 def _axis(f: _Fields, value) -> tuple[float, float, float]:
@@ -142,11 +140,7 @@ def _rotation(f: _Fields, data, k: int) -> RotationSpec:
     if not isinstance(limits, (list, tuple)) or len(limits) != 2:
         r.fail(f"limits must be [lower, upper] in rad, got {limits!r}")
     lo, hi = (r.number(x, f"limits[{i}]") for i, x in enumerate(limits))
-    if lo > hi:
-        r.fail(f"lower limit {lo} is above upper limit {hi}")
-    rest = r.number(r.get("rest", 0.0), "rest")
-    if not lo <= rest <= hi:
-        r.fail(f"rest angle {rest} is outside the limits [{lo}, {hi}]")
+    rest = r.number(r.get("rest", 0.0), "rest")  # limits and rest are checked once, by build_skeleton
     label = r.get("label", None)
     if label is None and isinstance(raw_axis, str):
         label = raw_axis.strip().lower().lstrip("+-")
@@ -163,48 +157,48 @@ def skeleton_from_dict(data, source: str = "<memory>") -> Skeleton:
     if top.get("units", "m") != "m":
         top.fail(f"units must be 'm' (metres), got {top.get('units')!r}")
     name = top.name("name")
-
     joints_data = top.get("joints")
     if not isinstance(joints_data, list) or not joints_data:
         top.fail(f"joints must be a non-empty list, got {joints_data!r}")
-    joints = []
-    for i, jd in enumerate(joints_data):
-        f = _Fields(jd, f"joints[{i}]", source)
-        jname = f.name()
-        f.where = f"joints[{i}] ({jname})"
-        f.check_keys(("name", "parent", "offset", "rotations", "orientation"))
-        rots = f.get("rotations", [])
-        if not isinstance(rots, list):
-            f.fail(f"rotations must be a list, got {rots!r}")
-        joints.append(JointSpec(
-            name=jname,
-            parent=f.name("parent", None),
-            offset=f.vector("offset", default=(0.0, 0.0, 0.0)),
-            rotations=tuple(_rotation(f, r, k) for k, r in enumerate(rots)),
-            orientation=f.orientation(),
-        ))
-
-    sites = []
-    for i, sd in enumerate(_list(top, "sites")):
-        f = _Fields(sd, f"sites[{i}]", source)
-        f.check_keys(("name", "parent", "offset", "orientation"))
-        sites.append(SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)),
-                              f.orientation()))
-    segments = []
-    for i, sd in enumerate(_list(top, "segments")):
-        f = _Fields(sd, f"segments[{i}]", source)
-        f.check_keys(("name", "from", "to"))
-        to = f.get("to")
-        ends = [to] if isinstance(to, str) else to
-        if not isinstance(ends, list) or not ends or not all(isinstance(e, str) and e for e in ends):
-            f.fail(f"to must be a joint or site name or a list of them, got {to!r}")
-        segments.append(SegmentSpec(f.name(), f.name("from"), tuple(ends)))
+    joints = [_joint(_Fields(jd, f"joints[{i}]", source), i) for i, jd in enumerate(joints_data)]
+    sites = [_site(_Fields(sd, f"sites[{i}]", source)) for i, sd in enumerate(_list(top, "sites"))]
+    segments = [_segment(_Fields(sd, f"segments[{i}]", source)) for i, sd in enumerate(_list(top, "segments"))]
     effectors = _list(top, "effectors")
     for e in effectors:
         if not isinstance(e, str):
             top.fail(f"effectors must be a list of site names, got {e!r}")
     root = top.name("root", None)
     return build_skeleton(name, joints, sites, segments, effectors, root, source)
+
+
+def _joint(f: _Fields, i: int) -> JointSpec:
+    jname = f.name()
+    f.where = f"joints[{i}] ({jname})"
+    f.check_keys(("name", "parent", "offset", "rotations", "orientation"))
+    rots = f.get("rotations", [])
+    if not isinstance(rots, list):
+        f.fail(f"rotations must be a list, got {rots!r}")
+    return JointSpec(
+        name=jname,
+        parent=f.name("parent", None),
+        offset=f.vector("offset", default=(0.0, 0.0, 0.0)),
+        rotations=tuple(_rotation(f, r, k) for k, r in enumerate(rots)),
+        orientation=f.orientation(),
+    )
+
+
+def _site(f: _Fields) -> SiteSpec:
+    f.check_keys(("name", "parent", "offset", "orientation"))
+    return SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)), f.orientation())
+
+
+def _segment(f: _Fields) -> SegmentSpec:
+    f.check_keys(("name", "from", "to"))
+    to = f.get("to")
+    ends = [to] if isinstance(to, str) else to
+    if not isinstance(ends, list) or not ends or not all(isinstance(e, str) and e for e in ends):
+        f.fail(f"to must be a joint or site name or a list of them, got {to!r}")
+    return SegmentSpec(f.name(), f.name("from"), tuple(ends))
 
 
 def _list(top: _Fields, key: str) -> list:

@@ -14,14 +14,15 @@ from __future__ import annotations
 import os
 import re
 import xml.etree.ElementTree as ET
+from collections import Counter
 from dataclasses import dataclass
 from functools import cached_property
-from pathlib import Path
 
 import numpy as np
 
 from gsik.errors import UrdfError, choices
-from gsik.io.files import file_error
+from gsik.io.files import read_bytes
+from gsik.validate import finite_array
 
 #: Joint types this module parses (prismatic is parsed; conversion may reject it).
 JOINT_TYPES = ("revolute", "continuous", "fixed", "prismatic")
@@ -33,13 +34,7 @@ _NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 def _frozen_vector(v, what: str) -> np.ndarray:
-    a = np.array(v, dtype=float)
-    if a.shape != (3,):
-        raise UrdfError(f"{what} must have shape (3,), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise UrdfError(f"{what} {a.tolist()} is not finite")
-    a.flags.writeable = False
-    return a
+    return finite_array(v, (3,), what, UrdfError)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,6 +150,17 @@ class UrdfRobot:
     def _by_child(self) -> dict[str, UrdfJoint]:
         return {j.child: j for j in self.joints}
 
+    @cached_property
+    def _by_parent(self) -> dict[str, tuple[UrdfJoint, ...]]:
+        out: dict[str, list[UrdfJoint]] = {}
+        for j in self.joints:
+            out.setdefault(j.parent, []).append(j)
+        return {link: tuple(js) for link, js in out.items()}
+
+    @cached_property
+    def _link_set(self) -> frozenset[str]:
+        return frozenset(self.links)
+
     def joint(self, name: str) -> UrdfJoint:
         """The joint called ``name``."""
         try:
@@ -164,13 +170,13 @@ class UrdfRobot:
 
     def parent_joint(self, link: str) -> UrdfJoint | None:
         """The joint whose child is ``link``; ``None`` for the root link."""
-        if link not in self.links:
+        if link not in self._link_set:
             raise UrdfError(f"robot {self.name!r} has no link {link!r}; links: {choices(self.links)}")
         return self._by_child.get(link)
 
     def child_joints(self, link: str) -> tuple[UrdfJoint, ...]:
         """Joints whose parent is ``link``, in file order."""
-        return tuple(j for j in self.joints if j.parent == link)
+        return self._by_parent.get(link, ())
 
     def joints_in_tree_order(self) -> tuple[UrdfJoint, ...]:
         """All joints depth-first from the root link (parent before child, siblings in file order)."""
@@ -350,12 +356,30 @@ def _parse_joint(elem: ET.Element, index: int, links: set[str]) -> UrdfJoint:
 
 def _check_tree(links: tuple[str, ...], joints: tuple[UrdfJoint, ...]) -> str:
     """Check that links and joints form one tree; return the root link."""
+    link_set = _check_links(links)
+    parent_of = _parent_of(joints, link_set)
+    root = _root_link(links, parent_of)
+    # One root and one parent per link: whatever the root cannot reach lies on a cycle.
+    reached = _reachable(root, joints)
+    for n in links:
+        if n not in reached:
+            raise UrdfError(f"the joints form a cycle: {_a_cycle(n, parent_of)}")
+    return root
+
+
+def _check_links(links: tuple[str, ...]) -> set[str]:
+    """At least one link, each named once; returns the names as a set."""
     if not links:
         raise UrdfError("robot has no <link>")
     link_set = set(links)
     if len(link_set) != len(links):
-        dup = next(n for n in links if links.count(n) > 1)
+        dup = next(n for n, count in Counter(links).items() if count > 1)
         raise UrdfError(f"duplicate link name {dup!r}")
+    return link_set
+
+
+def _parent_of(joints: tuple[UrdfJoint, ...], link_set: set[str]) -> dict[str, UrdfJoint]:
+    """``{child link: its joint}``; joints named once, between known links, one parent per link."""
     joint_names: set[str] = set()
     parent_of: dict[str, UrdfJoint] = {}
     for j in joints:
@@ -370,27 +394,33 @@ def _check_tree(links: tuple[str, ...], joints: tuple[UrdfJoint, ...]) -> str:
                 f"link {j.child!r} has two parents: joints {parent_of[j.child].name!r} and {j.name!r}"
             )
         parent_of[j.child] = j
+    return parent_of
+
+
+def _root_link(links: tuple[str, ...], parent_of: dict[str, UrdfJoint]) -> str:
+    """The one link that is no joint's child."""
     roots = [n for n in links if n not in parent_of]
     if len(roots) > 1:
         raise UrdfError(f"more than one root link (links that are no joint's child): {choices(roots)}")
     if not roots:
         cycle = _a_cycle(links[0], parent_of)
         raise UrdfError(f"no root link: every link is some joint's child, so the joints form a cycle: {cycle}")
-    # One root and one parent per link: whatever the root cannot reach lies on a cycle.
-    reached = {roots[0]}
+    return roots[0]
+
+
+def _reachable(root: str, joints: tuple[UrdfJoint, ...]) -> set[str]:
+    """The links reached from ``root`` through the joints."""
+    reached = {root}
     children: dict[str, list[str]] = {}
     for j in joints:
         children.setdefault(j.parent, []).append(j.child)
-    stack = [roots[0]]
+    stack = [root]
     while stack:
         for c in children.get(stack.pop(), ()):
             if c not in reached:
                 reached.add(c)
                 stack.append(c)
-    for n in links:
-        if n not in reached:
-            raise UrdfError(f"the joints form a cycle: {_a_cycle(n, parent_of)}")
-    return roots[0]
+    return reached
 
 
 def _a_cycle(start: str, parent_of: dict[str, UrdfJoint]) -> str:
@@ -463,10 +493,7 @@ def read_urdf(path: str | os.PathLike) -> UrdfRobot:
         GsikFileError: the file cannot be read.
     """
     source = os.fspath(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise file_error("cannot read URDF file", path, exc) from exc
+    data = read_bytes(path, "URDF file")  # bytes: the XML parser decodes them as declared
     return _robot_from_xml(_xml_root(data, source), source)
 
 

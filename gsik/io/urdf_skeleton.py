@@ -36,7 +36,8 @@ import numpy as np
 
 from gsik.errors import UrdfError, choices
 from gsik.skeleton import JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
-from gsik.io.urdf import UrdfRobot, read_urdf
+from gsik.io.names import unique_name
+from gsik.io.urdf import UrdfJoint, UrdfRobot, read_urdf
 
 #: Label of a URDF joint's one rotation: DOF names are ``"<joint>.q"``.
 DOF_LABEL = "q"
@@ -44,15 +45,10 @@ DOF_LABEL = "q"
 
 def link_site_names(robot: UrdfRobot) -> dict[str, str]:
     """``{link: site name}``: the link's own name, or ``"<link>_link"`` where a joint has that name."""
-    joints = {j.name for j in robot.joints}
-    taken = set(joints)
+    taken = {j.name for j in robot.joints}
     out = {}
     for link in robot.links:
-        name = link if link not in taken else f"{link}_link"
-        k = 2
-        base = name
-        while name in taken:
-            name, k = f"{base}{k}", k + 1
+        name = unique_name(link if link not in taken else f"{link}_link", taken)
         taken.add(name)
         out[link] = name
     return out
@@ -79,60 +75,82 @@ def skeleton_from_urdf(
         GsikFileError: the file cannot be read.
     """
     robot = robot_or_path if isinstance(robot_or_path, UrdfRobot) else read_urdf(robot_or_path)
-    if isinstance(continuous_limit, bool) or not isinstance(continuous_limit, (int, float)) \
-            or not (math.isfinite(continuous_limit) and continuous_limit > 0):
-        raise UrdfError(f"continuous_limit must be a positive angle [rad], got {continuous_limit!r}")
+    continuous_limit = _check_continuous_limit(continuous_limit)
     site_of = link_site_names(robot)
-    taken = set(site_of.values()) | {j.name for j in robot.joints}
-    top = f"{robot.root_link}_root"
-    k = 2
-    while top in taken:
-        top, k = f"{robot.root_link}_root{k}", k + 1
+    top = unique_name(f"{robot.root_link}_root", set(site_of.values()) | {j.name for j in robot.joints})
+    specs, joint_of_link = _joint_specs(robot, top, continuous_limit)
+    sites = [SiteSpec(site_of[link], joint_of_link[link], (0.0, 0.0, 0.0)) for link in robot.links]
+    names = _Names(robot, site_of, set(joint_of_link.values()))
+    if effectors is None:
+        chosen = [site_of[link] for link in robot.links if not robot.child_joints(link)]
+    else:
+        chosen = names.effectors(effectors)
+    root_name = site_of[robot.root_link] if root is None else names.resolve(root, "root")
+    return build_skeleton(robot.name or "robot", specs, sites, _segments(robot, site_of), effectors=chosen,
+                          root=root_name, source=f"<urdf {robot.name}>")
 
+
+def _check_continuous_limit(value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and value > 0):
+        raise UrdfError(f"continuous_limit must be a positive angle [rad], got {value!r}")
+    return float(value)
+
+
+def _joint_specs(robot: UrdfRobot, top: str, continuous_limit: float) -> tuple[list[JointSpec], dict[str, str]]:
+    """The joint specs, the fixed ``top`` first, and ``{link: the joint whose frame it is}``."""
     joint_of_link = {robot.root_link: top}
     specs = [JointSpec(top, None, (0.0, 0.0, 0.0))]
     for j in robot.joints_in_tree_order():
-        if j.type == "prismatic":
-            raise UrdfError(f"prismatic joint {j.name!r} is not supported: gsik joints only rotate "
-                            "(make it fixed to pose the rest of the robot)")
-        rotations: tuple[RotationSpec, ...] = ()
-        if j.type in ("revolute", "continuous"):
-            if j.type == "revolute":
-                lo, hi = float(j.lower), float(j.upper)
-            else:
-                lo, hi = -float(continuous_limit), float(continuous_limit)
-            rotations = (RotationSpec(tuple(j.axis), lo, hi, min(max(0.0, lo), hi), DOF_LABEL),)
         orientation = None if not np.any(j.origin_rpy) else j.origin_rotation
-        specs.append(JointSpec(j.name, joint_of_link[j.parent], tuple(j.origin_xyz), rotations, orientation))
+        specs.append(JointSpec(j.name, joint_of_link[j.parent], tuple(j.origin_xyz), _rotations(j, continuous_limit),
+                               orientation))
         joint_of_link[j.child] = j.name
+    return specs, joint_of_link
 
-    sites = [SiteSpec(site_of[link], joint_of_link[link], (0.0, 0.0, 0.0)) for link in robot.links]
+
+def _rotations(j: UrdfJoint, continuous_limit: float) -> tuple[RotationSpec, ...]:
+    """The one rotation of a revolute or continuous joint; none for a fixed one."""
+    if j.type == "prismatic":
+        raise UrdfError(f"prismatic joint {j.name!r} is not supported: gsik joints only rotate "
+                        "(make it fixed to pose the rest of the robot)")
+    if j.type not in ("revolute", "continuous"):
+        return ()
+    lo, hi = (float(j.lower), float(j.upper)) if j.type == "revolute" else (-continuous_limit, continuous_limit)
+    return (RotationSpec(tuple(j.axis), lo, hi, min(max(0.0, lo), hi), DOF_LABEL),)
+
+
+def _segments(robot: UrdfRobot, site_of: dict[str, str]) -> list[SegmentSpec]:
+    """One segment per link with children, drawn from the link to each child link."""
     segments = []
     for link in robot.links:
         ends = tuple(site_of[j.child] for j in robot.child_joints(link))
         if ends:
             segments.append(SegmentSpec(link, site_of[link], ends))
+    return segments
 
-    def resolve(name: str, what: str) -> str:
-        if name in site_of:
-            return site_of[name]
-        if name in site_of.values():
-            return name
-        if what == "root" and name in joint_of_link.values():
-            return name
-        raise UrdfError(f"robot {robot.name!r} has no link {name!r} to use as {what}; links: {choices(robot.links)}")
 
-    if effectors is None:
-        chosen = [site_of[link] for link in robot.links if not robot.child_joints(link)]
-    else:
-        if isinstance(effectors, str):
-            effectors = [effectors]
-        chosen = [resolve(e, "an effector") for e in effectors]
+class _Names:
+    """Effector and root names as the user gives them (links, sites, joints) → site or joint names."""
+
+    def __init__(self, robot: UrdfRobot, site_of: dict[str, str], joints: set[str]) -> None:
+        self.robot, self.site_of, self.sites, self.joints = robot, site_of, set(site_of.values()), joints
+
+    def resolve(self, name: str, what: str) -> str:
+        if name in self.site_of:
+            return self.site_of[name]
+        if name in self.sites:
+            return name
+        if what == "root" and name in self.joints:
+            return name
+        raise UrdfError(f"robot {self.robot.name!r} has no link {name!r} to use as {what}; "
+                        f"links: {choices(self.robot.links)}")
+
+    def effectors(self, effectors: Sequence[str] | str) -> list[str]:
+        effectors = [effectors] if isinstance(effectors, str) else effectors
+        chosen = [self.resolve(e, "an effector") for e in effectors]
         if len(set(chosen)) != len(chosen):
             raise UrdfError(f"effectors are listed twice: {list(effectors)}")
-    root_name = site_of[robot.root_link] if root is None else resolve(root, "root")
-    return build_skeleton(robot.name or "robot", specs, sites, segments, effectors=chosen, root=root_name,
-                          source=f"<urdf {robot.name}>")
+        return chosen
 
 
 __all__ = ["DOF_LABEL", "link_site_names", "skeleton_from_urdf"]

@@ -27,7 +27,7 @@ from gsik.io.bvh import (
 )
 from gsik.errors import BvhError, GsikError, GsikFileError
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 # Line numbers of this text are used by the malformed-file cases below.
 BASE = """\

@@ -14,7 +14,7 @@ from gsik.rotations import matrix_from_axis_angle
 from gsik.io.urdf import matrix_from_rpy, parse_urdf, read_urdf
 from gsik.io.urdf_skeleton import link_site_names, skeleton_from_urdf
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 ROBOTS = ["humanoid.urdf", "two_link_arm.urdf"]
 
 

@@ -31,7 +31,7 @@ from gsik.anim.motion import Motion
 from gsik.rotations import matrix_from_rotvec
 from gsik.io.urdf_skeleton import skeleton_from_urdf
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 FIXTURES = sorted(p.name for p in DATA.glob("*.bvh"))
 ORDERS = ["".join(p) for p in itertools.permutations("xyz")]
 PRECISION = {"cm": 6, "m": 8}

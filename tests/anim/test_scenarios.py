@@ -17,14 +17,12 @@ from gsik.anim.scenarios import (
     angles,
     builtin_scenario,
     builtin_scenarios,
-    format_table,
     random_scenario,
     random_scenarios,
-    run_scenario,
-    run_scenarios,
     scenario_from_angles,
     scenario_pose,
 )
+from gsik.anim.scenario_run import format_table, run_scenario, run_scenarios
 from gsik.skeleton import JointSpec, RotationSpec, SiteSpec, build_skeleton
 
 

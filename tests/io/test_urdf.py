@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from gsik.errors import GsikError, GsikFileError, UrdfError
 from gsik.io.urdf import UrdfJoint, UrdfRobot, matrix_from_rpy, parse_urdf, read_urdf
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 ARM = """\
 <?xml version="1.0"?>

@@ -1,0 +1,220 @@
+"""gsik -> BVH: poses and motions as BVH clips (conventions in :mod:`gsik.io.bvh_skeleton`)."""
+
+from __future__ import annotations
+
+import os
+import re
+from typing import NamedTuple
+
+import numpy as np
+
+from gsik.anim.motion import Motion
+from gsik.errors import BvhError, choices
+from gsik.io.bvh import BvhClip, BvhJoint, format_bvh
+from gsik.io.bvh_skeleton.conventions import EULER_ORDER, UNITS_PER_METRE, UP_AXES, Z_UP_TO_Y_UP, euler_from_matrix
+from gsik.io.files import atomic_write_text
+from gsik.io.names import unique_name
+from gsik.kinematics import world_frames
+from gsik.rotations import matrix_from_axis_angle
+from gsik.skeleton import Skeleton
+
+_BAD_NAME_CHARS = re.compile(r"[\s{}]")
+#: How close to a coordinate axis (and to no fixed orientation) a joint must be for exact channels.
+_EXACT_TOLERANCE = 1e-12
+
+
+
+
+def _check_units(units: str) -> float:
+    if units not in UNITS_PER_METRE:
+        raise BvhError(f"unknown units {units!r}; expected one of {choices(UNITS_PER_METRE)}")
+    return UNITS_PER_METRE[units]
+
+
+def _check_up(up: str) -> np.ndarray:
+    if up not in UP_AXES:
+        raise BvhError(f"unknown up axis {up!r}; expected one of {choices(UP_AXES)}")
+    return Z_UP_TO_Y_UP if up == "y" else np.eye(3)
+
+
+def _bvh_name(name: str) -> str:
+    return _BAD_NAME_CHARS.sub("_", name)
+
+
+def _first_frame(sk: Skeleton, j: int) -> int:
+    """The frame holding joint ``j``'s offset and fixed orientation."""
+    dofs = sk.joint_dofs[j]
+    return int(sk.dof_frame[dofs[0]]) if dofs else int(sk.joint_frame[j])
+
+
+class _Channels(NamedTuple):
+    """How one exported joint fills its channels."""
+
+    channels: tuple[str, ...]
+    dofs: tuple[int, ...]  # exact: the DOF of each channel
+    signs: tuple[float, ...]  # exact: +1 / -1 per channel
+    euler: bool  # decompose the local rotation instead
+
+
+def _joint_channels(sk: Skeleton, j: int, C: np.ndarray, order: str) -> _Channels:
+    dofs = sk.joint_dofs[j]
+    if not dofs:
+        return _Channels((), (), (), False)
+    R0 = sk.frame_rotation[_first_frame(sk, j)]
+    channels, signs = [], []
+    exact = bool(np.abs(R0 - np.eye(3)).max() <= _EXACT_TOLERANCE)
+    for d in dofs:
+        a = C @ sk.frame_axis[sk.dof_frame[d]]
+        i = int(np.argmax(np.abs(a)))
+        if abs(abs(a[i]) - 1.0) > _EXACT_TOLERANCE:
+            exact = False
+            break
+        channels.append("XYZ"[i] + "rotation")
+        signs.append(float(np.sign(a[i])))
+    if exact and len(set(channels)) == len(channels):
+        return _Channels(tuple(channels), tuple(dofs), tuple(signs), False)
+    return _Channels(tuple(c.upper() + "rotation" for c in order), (), (), True)
+
+
+def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z") -> BvhClip:
+    """A :class:`~gsik.anim.motion.Motion` as a BVH clip (see the module's conventions).
+
+    Args:
+        motion: The motion; each frame may pin a different IK root.
+        units: ``"cm"`` (default) or ``"m"``: the unit of offsets and positions.
+        up: ``"z"`` (default, gsik's world) or ``"y"``.
+
+    Returns:
+        The clip, hierarchy rooted at the skeleton's top joint.
+
+    Raises:
+        BvhError: bad ``units`` or ``up``, an empty motion, or two names that
+            are the same once made valid BVH names.
+    """
+    if not isinstance(motion, Motion):
+        raise BvhError(f"motion_to_bvh needs a gsik.anim.motion.Motion, got {type(motion).__name__}")
+    scale = _check_units(units)
+    C = _check_up(up)
+    order = EULER_ORDER[up]
+    if motion.n_frames == 0:
+        raise BvhError("cannot export a motion with no frames")
+    sk = motion.skeleton
+    F = motion.n_frames
+
+    # The top joint's world transform in each frame, from each frame's own root.
+    top_frame = int(sk.joint_frame[0])
+    top_R = np.empty((F, 3, 3))
+    top_p = np.empty((F, 3))
+    for f in range(F):
+        R, p = world_frames(sk, motion.q[f], motion.world_from_root[f], motion.roots[f])
+        top_R[f] = R[top_frame]
+        top_p[f] = p[top_frame]
+
+    site_joint = {}  # site index -> parent joint index
+    frame_to_joint = {int(fr): j for j, fr in enumerate(sk.joint_frame)}
+    for s, fr in enumerate(sk.site_frame):
+        site_joint[s] = frame_to_joint[int(sk.frame_parent[fr])]
+
+    joints: list[BvhJoint] = []
+    columns: list[np.ndarray] = []  # (F,) per channel, in file order
+    names: dict[str, str] = {}
+
+    def add(name: str, parent: int, offset, channels=(), is_end_site=False) -> int:
+        if not is_end_site:
+            bvh = _bvh_name(name)
+            if bvh in names:
+                raise BvhError(f"joints or sites {names[bvh]!r} and {name!r} both become {bvh!r} in BVH")
+            names[bvh] = name
+            name = bvh
+        joints.append(BvhJoint(name=name or "end", parent=parent, offset=offset, channels=channels,
+                               is_end_site=is_end_site))
+        return len(joints) - 1
+
+    def emit(j: int, parent: int) -> None:
+        if parent < 0:
+            world = C @ top_R @ C.T
+            angles = np.unwrap(euler_from_matrix(world, order), axis=0)
+            channels = ("Xposition", "Yposition", "Zposition") + tuple(a.upper() + "rotation" for a in order)
+            me = add(sk.joint_names[j], -1, (0.0, 0.0, 0.0), channels)
+            columns.extend(scale * (top_p @ C.T).T)
+            columns.extend(np.degrees(angles).T)
+        else:
+            offset = scale * (C @ sk.frame_offset[_first_frame(sk, j)])
+            plan = _joint_channels(sk, j, C, order)
+            me = add(sk.joint_names[j], parent, offset, plan.channels)
+            if plan.euler:
+                R = np.broadcast_to(sk.frame_rotation[_first_frame(sk, j)], (F, 3, 3))
+                for d in sk.joint_dofs[j]:
+                    R = R @ matrix_from_axis_angle(sk.frame_axis[sk.dof_frame[d]], motion.q[:, d])
+                angles = np.unwrap(euler_from_matrix(C @ R @ C.T, order), axis=0)
+                columns.extend(np.degrees(angles).T)
+            else:
+                columns.extend(np.degrees(sign * motion.q[:, d]) for d, sign in zip(plan.dofs, plan.signs))
+        children = [k for k in range(sk.n_joints) if sk.joint_parent[k] == j]
+        sites = [s for s in range(len(sk.site_names)) if site_joint[s] == j]
+        for k in children:
+            emit(k, me)
+        for s in sites:
+            fr = sk.site_frame[s]
+            site = add(sk.site_names[s], me, scale * (C @ sk.frame_offset[fr]))
+            add("", site, (0.0, 0.0, 0.0), is_end_site=True)
+        if not children and not sites:
+            add("", me, (0.0, 0.0, 0.0), is_end_site=True)
+
+    emit(0, -1)
+    # End Sites get the parser's names, "<parent>_end", unique among all names.
+    taken = set(names)
+    for i, joint in enumerate(joints):
+        if joint.is_end_site:
+            name = unique_name(joints[joint.parent].name + "_end", taken)
+            taken.add(name)
+            joints[i] = BvhJoint(name=name, parent=joint.parent, offset=joint.offset, is_end_site=True)
+    motion_values = np.stack(columns, axis=1) if columns else np.zeros((F, 0))
+    return BvhClip(joints=tuple(joints), frame_time=motion.frame_time, motion=motion_values)
+
+
+def pose_to_bvh(
+    skeleton: Skeleton,
+    q,
+    world_from_root=None,
+    root: str | None = None,
+    units: str = "cm",
+    up: str = "z",
+    frame_time: float = 1.0 / 30.0,
+) -> BvhClip:
+    """One pose as a one-frame BVH clip (see :func:`motion_to_bvh`).
+
+    Args:
+        skeleton: The skeleton.
+        q: Joint angles (n_dofs,) [rad].
+        world_from_root: World transform (4, 4) of ``root``; by default the
+            skeleton stands where its definition places it.
+        root: The frame ``world_from_root`` pins (default ``skeleton.root``).
+        units, up: As for :func:`motion_to_bvh`.
+        frame_time: The clip's frame time [s].
+    """
+    q = skeleton.validate_q(q)
+    root = skeleton.root if root is None else root
+    if world_from_root is None:
+        world_from_root = skeleton.frame_transforms(q)[skeleton.frame_of(root)]
+    motion = Motion(skeleton, q[None], (root,), np.asarray(world_from_root, dtype=float)[None], frame_time)
+    return motion_to_bvh(motion, units=units, up=up)
+
+
+def write_motion_bvh(
+    path: str | os.PathLike, motion: Motion, units: str = "cm", up: str = "z", precision: int | None = None
+) -> None:
+    """Export ``motion`` (see :func:`motion_to_bvh`) and write it to ``path`` atomically.
+
+    Args:
+        precision: Decimals of the numbers; by default 6 for centimetres and
+            8 for metres (10 nm either way; angles to 1e-6 degrees or finer).
+
+    Raises:
+        BvhError: as :func:`motion_to_bvh`.
+        GsikFileError: the file cannot be written.
+    """
+    clip = motion_to_bvh(motion, units=units, up=up)
+    if precision is None:
+        precision = 8 if units == "m" else 6
+    atomic_write_text(path, format_bvh(clip, precision))

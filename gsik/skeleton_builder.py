@@ -1,0 +1,326 @@
+"""The raw skeleton: editable specs (joints with their one-DOF rotations, sites, segments) and the builder that
+checks them and turns them into the structure-of-arrays of :class:`gsik.skeleton.Skeleton`.
+
+Use :func:`gsik.build_skeleton`; this module holds its steps (ozz-animation's raw skeleton → runtime skeleton).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from gsik.errors import SkeletonError, choices
+from gsik.rotations import is_rotation_matrix
+from gsik.validate import frozen, vector
+
+AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+
+@dataclass(frozen=True)
+class RotationSpec:
+    """One one-DOF rotation of a joint.
+
+    Attributes:
+        axis: Unit axis (3,) in the joint's frame.
+        lower: Lower limit [rad].
+        upper: Upper limit [rad].
+        rest: Angle in the standing (rest) pose [rad].
+        label: Short name used in the DOF name (``"x"`` gives ``"left_hip.x"``).
+    """
+
+    axis: tuple[float, float, float]
+    lower: float
+    upper: float
+    rest: float = 0.0
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """A primary joint: a point on its parent with zero or more rotations.
+
+    Attributes:
+        name: Unique joint name.
+        parent: Parent joint name, ``None`` for the top of the tree.
+        offset: Position (3,) [m] of the joint in its parent's frame at rest.
+        rotations: The one-DOF rotations, applied in order (first is outermost).
+        orientation: Fixed rotation (3, 3) of the joint frame before its
+            rotations (URDF origins need it); identity when ``None``.
+    """
+
+    name: str
+    parent: str | None
+    offset: tuple[float, float, float]
+    rotations: tuple[RotationSpec, ...] = ()
+    orientation: tuple | None = None
+
+
+@dataclass(frozen=True)
+class SiteSpec:
+    """A named frame fixed to a joint: an effector, the root or a bone tip.
+
+    Attributes:
+        name: Unique name (shared namespace with joints).
+        parent: The joint it is fixed to.
+        offset: Position (3,) [m] in the parent joint's frame.
+        orientation: Fixed rotation (3, 3) in the parent joint's frame, or ``None``.
+    """
+
+    name: str
+    parent: str
+    offset: tuple[float, float, float]
+    orientation: tuple | None = None
+
+
+@dataclass(frozen=True)
+class SegmentSpec:
+    """A rigid segment, drawn as bones from one joint or site to one or more others."""
+
+    name: str
+    start: str
+    ends: tuple[str, ...]
+
+
+def _axis_label(axis, k: int) -> str:
+    for label, a in AXES.items():
+        if np.allclose(axis, a):
+            return label
+    return f"r{k}"
+
+
+def _vector(value, what: str) -> tuple[float, float, float]:
+    return vector(value, 3, what, SkeletonError)
+
+
+def _orientation(value, what: str) -> np.ndarray:
+    if value is None:
+        return np.eye(3)
+    R = np.asarray(value, dtype=float)
+    if not is_rotation_matrix(R):
+        raise SkeletonError(f"{what} must be a rotation matrix, got {value!r}")
+    return R
+
+
+class _FrameRow(NamedTuple):
+    """One frame of the table under construction (see :class:`Skeleton` for the columns)."""
+
+    name: str
+    parent: int
+    offset: tuple
+    rotation: np.ndarray
+    axis: tuple = (0.0, 0.0, 0.0)
+    dof: int = -1
+
+
+class _DofRow(NamedTuple):
+    """One one-DOF rotation of the table under construction."""
+
+    name: str
+    frame: int
+    lower: float
+    upper: float
+    rest: float
+
+
+def _add(rows: list, row) -> int:
+    """Append ``row``; returns its index."""
+    rows.append(row)
+    return len(rows) - 1
+
+
+class SkeletonBuilder:
+    """Raw specs → the arrays of a :class:`~gsik.skeleton.Skeleton` by named steps (ozz-animation's raw → runtime builder).
+
+    Each step checks one thing or fills one table; :meth:`arrays` freezes the tables.
+    """
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self.frames: list[_FrameRow] = []
+        self.dofs: list[_DofRow] = []
+        self.by_name: dict[str, JointSpec] = {}
+        self.order: list[str] = []
+        self.joint_frame: dict[str, int] = {}
+        self.joint_dofs: dict[str, tuple[int, ...]] = {}
+        self.site_names: list[str] = []
+        self.site_frame: list[int] = []
+        self.index: dict[str, int] = {}
+        self.segment_names: list[str] = []
+        self.bones: list[tuple[int, int]] = []
+        self.bone_segment: list[int] = []
+        self.effectors: tuple[str, ...] = ()
+        self.root = ""
+
+    def fail(self, msg: str):
+        raise SkeletonError(f"{self.source}: {msg}")
+
+    # --- names and the tree --------------------------------------------------------------
+    def index_joints(self, joints: Sequence[JointSpec]) -> None:
+        """Every joint named once, with a non-empty string."""
+        if not joints:
+            self.fail("a skeleton needs at least one joint")
+        for j in joints:
+            if not isinstance(j.name, str) or not j.name:
+                self.fail(f"joint name must be a non-empty string, got {j.name!r}")
+            if j.name in self.by_name:
+                self.fail(f"duplicate joint name {j.name!r}")
+            self.by_name[j.name] = j
+
+    def check_sites(self, sites: Sequence[SiteSpec]) -> None:
+        """Site names unique among joints and sites, each site hung on a joint."""
+        counts = Counter(s.name for s in sites)
+        for s in sites:
+            if s.name in self.by_name or counts[s.name] > 1:
+                self.fail(f"duplicate name {s.name!r} (joint and site names share one namespace)")
+            if s.parent not in self.by_name:
+                self.fail(f"site {s.name!r}: parent {s.parent!r} is not a joint; joints: {choices(self.by_name)}")
+        self.site_names = [s.name for s in sites]
+
+    def top_joint(self, joints: Sequence[JointSpec]) -> str:
+        """The one joint without a parent; every other parent must be a joint."""
+        tops = [j.name for j in joints if j.parent is None]
+        for j in joints:
+            if j.parent is not None and j.parent not in self.by_name:
+                self.fail(f"joint {j.name!r}: parent {j.parent!r} is not a joint; joints: {choices(self.by_name)}")
+        if not tops:
+            self.fail("no joint without a parent: the joints form a cycle")
+        if len(tops) != 1:
+            self.fail(f"exactly one joint may have no parent, found {len(tops)}: {choices(tops)}")
+        return tops[0]
+
+    def order_joints(self, joints: Sequence[JointSpec], top: str) -> None:
+        """Topological order: depth first from ``top``, keeping the file's order among siblings."""
+        children: dict[str, list[str]] = {j.name: [] for j in joints}
+        for j in joints:
+            if j.parent is not None:
+                children[j.parent].append(j.name)
+        stack = [top]
+        while stack:
+            n = stack.pop()
+            self.order.append(n)
+            stack.extend(reversed(children[n]))
+        if len(self.order) != len(joints):
+            cyclic = sorted(set(children) - set(self.order))
+            self.fail(f"joints {choices(cyclic)} form a cycle (none of them leads back to {top!r})")
+
+    # --- the frame and DOF tables --------------------------------------------------------
+    def add_joint(self, j: JointSpec) -> None:
+        """Frames (and DOFs) of one joint whose parent is already in the table."""
+        what = f"joint {j.name!r}"
+        p = -1 if j.parent is None else self.joint_frame[j.parent]
+        off = _vector(j.offset, f"{what} offset")
+        R0 = _orientation(j.orientation, f"{what} orientation")
+        if not j.rotations:
+            self.joint_frame[j.name] = _add(self.frames, _FrameRow(j.name, p, off, R0))
+            self.joint_dofs[j.name] = ()
+            return
+        labels = [r.label or _axis_label(r.axis, k) for k, r in enumerate(j.rotations)]
+        if len(set(labels)) != len(labels):
+            self.fail(f"{what}: rotations need distinct labels, got {labels}")
+        mine = []
+        for k, (r, label) in enumerate(zip(j.rotations, labels)):
+            axis, lo, hi, rs = self.check_rotation(r, f"{what} rotation {label}")
+            name = f"{j.name}.{label}"
+            if k > 0:  # later rotations hang on the previous one by a zero-length link
+                p, off, R0 = len(self.frames) - 1, (0.0, 0.0, 0.0), np.eye(3)
+            frame = _add(self.frames, _FrameRow(name, p, off, R0, axis, len(self.dofs)))
+            mine.append(_add(self.dofs, _DofRow(name, frame, lo, hi, rs)))
+        self.joint_frame[j.name] = len(self.frames) - 1
+        self.joint_dofs[j.name] = tuple(mine)
+
+    def check_rotation(self, r: RotationSpec, what: str) -> tuple[tuple, float, float, float]:
+        """``(unit axis, lower, upper, rest)`` of one rotation, checked."""
+        a = np.asarray(_vector(r.axis, f"{what} axis"))
+        norm = np.linalg.norm(a)
+        if norm < 1e-9:
+            self.fail(f"{what}: axis must not be zero")
+        lo, hi, rs = (float(r.lower), float(r.upper), float(r.rest))
+        if not all(np.isfinite(v) for v in (lo, hi, rs)):
+            self.fail(f"{what}: limits and rest must be finite, got lower={lo}, upper={hi}, rest={rs}")
+        if lo > hi:
+            self.fail(f"{what}: lower limit {lo} is above upper limit {hi}")
+        if not lo <= rs <= hi:
+            self.fail(f"{what}: rest angle {rs} is outside the limits [{lo}, {hi}]")
+        return tuple(a / norm), lo, hi, rs
+
+    def add_sites(self, sites: Sequence[SiteSpec]) -> None:
+        """One fixed frame per site; then every joint and site name gets its frame index."""
+        for s in sites:
+            self.site_frame.append(_add(self.frames, _FrameRow(
+                s.name, self.joint_frame[s.parent], _vector(s.offset, f"site {s.name!r} offset"),
+                _orientation(s.orientation, f"site {s.name!r} orientation"))))
+        self.index = {row.name: i for i, row in enumerate(self.frames)}
+        self.index.update(self.joint_frame)
+
+    def add_segments(self, segments: Sequence[SegmentSpec]) -> None:
+        """Bones (start frame, end frame) of each segment; every end a joint or site."""
+        seg_index: dict[str, int] = {}
+        for seg in segments:
+            if seg.name in seg_index:
+                self.fail(f"duplicate segment name {seg.name!r}")
+            if not seg.ends:
+                self.fail(f"segment {seg.name!r} needs at least one end")
+            for end in (seg.start, *seg.ends):
+                if end not in self.index:
+                    self.fail(f"segment {seg.name!r}: {end!r} is not a joint or site; joints: "
+                              f"{choices(self.order)}; sites: {choices(self.site_names)}")
+            for end in seg.ends:
+                self.bones.append((self.index[seg.start], self.index[end]))
+                self.bone_segment.append(len(seg_index))
+            seg_index[seg.name] = len(seg_index)
+        self.segment_names = list(seg_index)
+
+    def set_effectors(self, effectors: Sequence[str]) -> None:
+        """Effectors are sites, each listed once."""
+        self.effectors = tuple(effectors)
+        sites = set(self.site_names)
+        for e in self.effectors:
+            if e not in sites:
+                self.fail(f"effector {e!r} is not a site; sites: {choices(self.site_names)}")
+        if len(set(self.effectors)) != len(self.effectors):
+            self.fail(f"effectors are listed twice: {list(self.effectors)}")
+
+    def set_root(self, root: str | None) -> None:
+        """The IK root: a joint or site, the top joint by default."""
+        self.root = self.order[0] if root is None else root
+        if self.root not in self.index:
+            self.fail(f"root {self.root!r} is not a joint or site; sites: {choices(self.site_names)}")
+
+    # --- runtime structure ---------------------------------------------------------------
+    def arrays(self, name: str) -> dict:
+        """The fields of :class:`~gsik.skeleton.Skeleton`: frozen structure-of-arrays from the checked tables."""
+        order = self.order
+        frames = _FrameRow(*zip(*self.frames))  # columns; a skeleton has at least one frame
+        dofs = _DofRow(*(zip(*self.dofs) if self.dofs else ((),) * len(_DofRow._fields)))
+        joint_row = {n: i for i, n in enumerate(order)}
+        joint_parent = [-1 if self.by_name[n].parent is None else joint_row[self.by_name[n].parent] for n in order]
+        return dict(
+            name=name,
+            root=self.root,
+            frame_names=tuple(frames.name),
+            frame_parent=frozen(frames.parent, np.int64),
+            frame_offset=frozen(np.reshape(frames.offset, (-1, 3))),
+            frame_rotation=frozen(np.reshape(frames.rotation, (-1, 3, 3))),
+            frame_axis=frozen(np.reshape(frames.axis, (-1, 3))),
+            frame_dof=frozen(frames.dof, np.int64),
+            dof_names=tuple(dofs.name),
+            dof_frame=frozen(dofs.frame, np.int64),
+            lower=frozen(dofs.lower),
+            upper=frozen(dofs.upper),
+            rest=frozen(dofs.rest),
+            joint_names=tuple(order),
+            joint_frame=frozen([self.joint_frame[n] for n in order], np.int64),
+            joint_parent=frozen(joint_parent, np.int64),
+            joint_dofs=tuple(self.joint_dofs[n] for n in order),
+            site_names=tuple(self.site_names),
+            site_frame=frozen(self.site_frame, np.int64),
+            effector_sites=self.effectors,
+            segment_names=tuple(self.segment_names),
+            bone_frames=frozen(np.reshape(self.bones, (-1, 2)), np.int64),
+            bone_segment=frozen(self.bone_segment, np.int64),
+            source=self.source,
+        )
