@@ -4,7 +4,8 @@ Every YAML file gsik reads (poses, skeletons) goes through :func:`load_yaml`. It
 PyYAML's event stream (libyaml's parser when present), with PyYAML's safe resolver and scalar constructors, and
 refuses what a hand-written data file never needs but a hostile one uses:
 
-- anchors and aliases (``&a`` / ``*a``: a few hundred bytes of nested aliases expand to gigabytes);
+- aliases (``*a``) that expand the document past :data:`MAX_VALUES` values (a few hundred bytes of nested aliases
+  expand to billions) or that refer to the collection they are in;
 - tags other than the plain data types (``!!python/...``, ``!!binary``, ``!!set``, custom ``!tags``) and merge keys;
 - nesting deeper than :data:`MAX_DEPTH`, text longer than :data:`MAX_CHARS`;
 - integers beyond 64 bits and floats that overflow to infinity (``1.0e400``);
@@ -25,14 +26,16 @@ from yaml.constructor import SafeConstructor
 from yaml.nodes import ScalarNode
 from yaml.resolver import Resolver
 
-from gsik.errors import GsikError
-from gsik.messages import show_value
+from gsik.errors import GsikError, show_value
 
 #: Deepest nesting of lists and mappings a file may have (a pose needs 4, a skeleton 5).
 MAX_DEPTH = 64
 
 #: Longest YAML text accepted [characters]: far above a skeleton at the solver's DOF limit.
 MAX_CHARS = 8 * 1024 * 1024
+
+#: Most values (scalars, lists, mappings) a document may hold, counting each alias as the values it repeats.
+MAX_VALUES = 1_000_000
 
 #: Largest magnitude of an integer in a file (int64, what NumPy and the kernels can hold).
 MAX_INT = 2**63 - 1
@@ -57,7 +60,8 @@ class YamlDocument(NamedTuple):
     Attributes:
         data: Plain Python data: dicts, lists, str, int, float, bool, None (and ``datetime`` for plain dates).
         lines: 1-based line of every place in ``data``, keyed by its path from the top (``("joints", 3, "name")``):
-            a mapping key's own line, a list item's first line; ``()`` is the document's line.
+            a mapping key's own line, a list item's first line; ``()`` is the document's line. Places inside a
+            repeated alias have no entry of their own: the alias's place names the line.
     """
 
     data: Any
@@ -101,13 +105,18 @@ def load_yaml(text: str, source: str, error: type[GsikError]) -> YamlDocument:
 
 
 class _Collection:
-    """A list or mapping being built; ``key`` holds a mapping's pending key (``_NO_KEY`` when none)."""
+    """A list or mapping being built; ``key`` holds a mapping's pending key (``_NO_KEY`` when none).
 
-    __slots__ = ("value", "path", "key", "key_line", "key_lines")
+    ``anchor`` and ``first``: the collection's anchor (or ``None``) and the value count before it began.
+    """
 
-    def __init__(self, value, path: tuple):
+    __slots__ = ("value", "path", "key", "key_line", "key_lines", "anchor", "first")
+
+    def __init__(self, value, path: tuple, anchor: str | None, first: int):
         self.value = value
         self.path = path
+        self.anchor = anchor
+        self.first = first
         self.key = _NO_KEY
         self.key_line = 0
         self.key_lines: dict[Any, int] = {}
@@ -126,21 +135,28 @@ class _Builder:
         self.lines: dict[tuple, int] = {}
         self.data = None
         self.documents = 0
+        self.values = 0  # values so far, aliases counted as what they repeat
+        self.anchors: dict[str, tuple[Any, int]] = {}  # anchor -> (value, number of values in it)
 
     def fail(self, event: ev.Event, problem: str):
         raise self.error(f"{self.source}:{event.start_mark.line + 1}: {problem}")
 
     def feed(self, event: ev.Event) -> None:
-        if isinstance(event, ev.NodeEvent) and event.anchor is not None:
-            kind = "alias" if isinstance(event, ev.AliasEvent) else "anchor"
-            self.fail(event, f"anchors and aliases are not allowed in gsik files (found {kind} "
-                             f"{show_value(event.anchor)})")
-        if isinstance(event, ev.ScalarEvent):
-            self.add(event, self.scalar(event))
+        if isinstance(event, ev.AliasEvent):
+            self.alias(event)
+        elif isinstance(event, ev.ScalarEvent):
+            self.count(event, 1)
+            value = self.scalar(event)
+            if event.anchor is not None:
+                self.anchors[event.anchor] = (value, 1)
+            self.add(event, value)
         elif isinstance(event, (ev.SequenceStartEvent, ev.MappingStartEvent)):
+            self.count(event, 1)
             self.start(event)
         elif isinstance(event, (ev.SequenceEndEvent, ev.MappingEndEvent)):
             done = self.stack.pop()
+            if done.anchor is not None:
+                self.anchors[done.anchor] = (done.value, self.values - done.first)
             if not self.stack:
                 self.data = done.value
         elif isinstance(event, ev.DocumentStartEvent):
@@ -148,14 +164,30 @@ class _Builder:
             if self.documents > 1:
                 self.fail(event, "a gsik file holds one YAML document; found a second one ('---')")
 
+    def count(self, event: ev.NodeEvent, n: int) -> None:
+        self.values += n
+        if self.values > MAX_VALUES:
+            self.fail(event, f"the document holds more than {MAX_VALUES:,} values (counting what aliases repeat)")
+
+    def alias(self, event: ev.AliasEvent) -> None:
+        """Repeat an anchored value (shared, as yaml.safe_load does), counting what it repeats."""
+        if event.anchor not in self.anchors:
+            inside = any(c.anchor == event.anchor for c in self.stack)
+            problem = "refers to a list or mapping it is inside of" if inside else "refers to no anchor before it"
+            self.fail(event, f"alias *{show_value(event.anchor)[1:-1]} {problem}")
+        value, size = self.anchors[event.anchor]
+        self.count(event, size)
+        self.add(event, value)
+
     def start(self, event: ev.CollectionStartEvent) -> None:
         is_map = isinstance(event, ev.MappingStartEvent)
         self.check_tag(event, "tag:yaml.org,2002:map" if is_map else "tag:yaml.org,2002:seq")
         if len(self.stack) >= MAX_DEPTH:
             self.fail(event, f"lists and mappings are nested deeper than {MAX_DEPTH} levels")
         value: dict | list = {} if is_map else []
+        first = self.values - 1
         path = self.add(event, value)
-        self.stack.append(_Collection(value, path))
+        self.stack.append(_Collection(value, path, event.anchor, first))
 
     def add(self, event: ev.NodeEvent, value) -> tuple:
         """Place ``value`` in the collection being built; returns its path."""
@@ -224,4 +256,4 @@ class _Builder:
         return value
 
 
-__all__ = ["MAX_CHARS", "MAX_DEPTH", "MAX_INT", "YamlDocument", "load_yaml"]
+__all__ = ["MAX_CHARS", "MAX_DEPTH", "MAX_INT", "MAX_VALUES", "YamlDocument", "load_yaml"]

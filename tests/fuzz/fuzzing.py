@@ -48,23 +48,15 @@ TOKENS = {
 }
 
 
-@functools.cache
-def seeds() -> dict[str, list[str]]:
-    """Valid seed texts for each format."""
-    biped = gsik.load_skeleton("biped")
-    solver = gsik.Solver(biped)
+def pose_of(skeleton: gsik.Skeleton):
+    """The rest pose of ``skeleton`` with a target at every effector, as a pose file holds it."""
     from gsik.io.pose import Pose
     from gsik.rotations import quaternion_from_matrix
+    solver = gsik.Solver(skeleton)
     W = solver.world_from_root
     targets = {n: _target_pose(T) for n, T in solver.effector_poses().items()}
-    pose = Pose(biped.name, solver.root, tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])),
-                dict(zip(biped.dof_names, solver.q.tolist())), targets)
-    return {
-        "pose": [pose_to_yaml(pose)],
-        "skeleton": [(ROOT / "skeletons" / "biped.yaml").read_text(encoding="utf-8")],
-        "bvh": [p.read_text(encoding="utf-8") for p in sorted(DATA.glob("*.bvh"))],
-        "urdf": [p.read_text(encoding="utf-8") for p in sorted(DATA.glob("*.urdf"))],
-    }
+    return Pose(skeleton.name, solver.root, tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])),
+                dict(zip(skeleton.dof_names, solver.q.tolist())), targets)
 
 
 def _target_pose(world_from_effector):
@@ -72,6 +64,17 @@ def _target_pose(world_from_effector):
     import gsik.io.pose as pose_module
     make = getattr(pose_module, "TargetPose", None) or gsik.Target
     return make.from_transform(world_from_effector)
+
+
+@functools.cache
+def seeds() -> dict[str, list[str]]:
+    """Valid seed texts for each format."""
+    return {
+        "pose": [pose_to_yaml(pose_of(gsik.load_skeleton("biped")))],
+        "skeleton": [(ROOT / "skeletons" / "biped.yaml").read_text(encoding="utf-8")],
+        "bvh": [p.read_text(encoding="utf-8") for p in sorted(DATA.glob("*.bvh"))],
+        "urdf": [p.read_text(encoding="utf-8") for p in sorted(DATA.glob("*.urdf"))],
+    }
 
 
 @functools.cache
@@ -167,3 +170,57 @@ def fuzz(kind: str, n: int, seed: int = 0) -> Outcome:
                 out.crashes.append((text, problem, exc))
         out.slowest = max(out.slowest, time.perf_counter() - start)
     return out
+
+
+# -- bombs: memory and time of reading each hostile file, measured in a fresh process ------------------------
+
+#: (fixture, reader) pairs: every bomb through each reader it could be handed to.
+BOMBS = [("alias_bomb_pose.yaml", "pose"), ("alias_bomb_skeleton.yaml", "skeleton"), ("self_alias.yaml", "pose"),
+         ("self_alias.yaml", "skeleton"), ("deep_nesting.yaml", "pose"), ("deep_nesting.yaml", "skeleton"),
+         ("huge_int_pose.yaml", "pose"), ("xml_bomb.urdf", "urdf")]
+
+
+def _file_readers() -> dict[str, Callable]:
+    from gsik.io.pose import read_pose
+    from gsik.io.urdf import read_urdf
+    biped = gsik.load_skeleton("biped")
+    return {"pose": lambda p: read_pose(p, biped), "skeleton": gsik.load_skeleton,
+            "urdf": lambda p: skeleton_from_urdf(read_urdf(p))}
+
+
+def measure_bombs() -> dict:
+    """Read every bomb twice (timed, then under tracemalloc); returns figures per bomb and the process's peak.
+
+    Meant to run in a fresh process (``python -c "import fuzzing; fuzzing.print_bomb_figures()"``), so the peak
+    resident size is the bombs' own and not a test session's.
+    """
+    import resource
+    import tracemalloc
+    read = _file_readers()
+    rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    figures = []
+    for name, kind in BOMBS:
+        path = str(HOSTILE / name)
+        start = time.process_time()
+        outcome = _outcome(read[kind], path)
+        cpu = time.process_time() - start
+        tracemalloc.start()
+        _outcome(read[kind], path)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        figures.append({"file": name, "reader": kind, "outcome": outcome, "cpu_s": cpu, "traced_peak_mb": peak / 2**20})
+    rss_after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # kB on Linux
+    return {"bombs": figures, "rss_growth_mb": (rss_after - rss_before) / 1024, "rss_peak_mb": rss_after / 1024}
+
+
+def _outcome(read: Callable, path: str) -> str:
+    try:
+        read(path)
+        return "read"
+    except gsik.GsikError as exc:
+        return f"{type(exc).__name__}: {str(exc)[:120]}"
+
+
+def print_bomb_figures() -> None:
+    import json
+    print(json.dumps(measure_bombs()))
