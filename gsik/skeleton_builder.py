@@ -19,6 +19,24 @@ from gsik.validate import frozen, vector
 
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
+#: Most degrees of freedom a skeleton may have: the solver's work arrays grow with the square of the DOF count and
+#: a step with its cube (2048 DOFs: ~1.5 s a step), so larger skeletons are refused when built, not when solved.
+MAX_DOFS = 2048
+
+#: Most frames (a joint without rotations, each one-DOF rotation, each site: one frame) a skeleton may have; the
+#: frame-to-frame ancestry table holds the square of it (8192 frames: 64 MB).
+MAX_FRAMES = 8192
+
+
+def check_size(n_dofs: int, n_frames: int, source: str) -> None:
+    """Refuse a skeleton beyond :data:`MAX_DOFS` or :data:`MAX_FRAMES` with a :class:`SkeletonError`."""
+    if n_dofs > MAX_DOFS:
+        raise SkeletonError(f"{source}: {n_dofs:,} degrees of freedom; gsik's dense solver takes at most "
+                            f"{MAX_DOFS:,} (its work grows with the square of the count)")
+    if n_frames > MAX_FRAMES:
+        raise SkeletonError(f"{source}: {n_frames:,} frames (joints, rotations and sites); gsik takes at most "
+                            f"{MAX_FRAMES:,}")
+
 
 @dataclass(frozen=True)
 class RotationSpec:
@@ -169,6 +187,11 @@ class SkeletonBuilder:
             if j.name in self.by_name:
                 self.fail(f"duplicate joint name {j.name!r}")
             self.by_name[j.name] = j
+
+    def check_size(self, joints: Sequence[JointSpec], sites: Sequence[SiteSpec]) -> None:
+        """Within :data:`MAX_DOFS` and :data:`MAX_FRAMES`, before any table is filled."""
+        n_dofs = sum(len(j.rotations) for j in joints)
+        check_size(n_dofs, n_dofs + sum(not j.rotations for j in joints) + len(sites), self.source)
 
     def check_sites(self, sites: Sequence[SiteSpec]) -> None:
         """Site names unique among joints and sites, each site hung on a joint."""

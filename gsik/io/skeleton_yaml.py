@@ -11,6 +11,7 @@ from gsik import validate
 from gsik.io.files import read_text
 from gsik.io.yaml_safe import load_yaml
 from gsik.rotations import matrix_from_quaternion
+from gsik.skeleton_builder import check_size
 from gsik.skeleton import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
 
 FORMAT_VERSION = 1
@@ -171,6 +172,7 @@ def skeleton_from_dict(data, source: str = "<memory>", lines: dict | None = None
     joints_data = top.get("joints")
     if not isinstance(joints_data, list) or not joints_data:
         top.fail(f"joints must be a non-empty list, got {show_value(joints_data)}", "joints")
+    check_size(0, len(joints_data), source)  # a joint is at least a frame: refuse a huge file before reading on
     joints = [_joint(top.child(jd, f"joints[{i}]", "joints", i), i) for i, jd in enumerate(joints_data)]
     sites = [_site(top.child(sd, f"sites[{i}]", "sites", i)) for i, sd in enumerate(_list(top, "sites"))]
     segments = [_segment(top.child(sd, f"segments[{i}]", "segments", i)) for i, sd in enumerate(_list(top, "segments"))]
