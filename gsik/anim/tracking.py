@@ -205,21 +205,27 @@ def _requested_pairs(clip_sk: Skeleton, effectors, available: list[str]) -> dict
 
 
 class _ClipTargets(NamedTuple):
-    """What the clip asks for, per frame: root pose (F, 4, 4), targets, their positions (F, m, 3) [m] and
-    orientations (F, m, 3, 3)."""
+    """What the clip asks for, per frame: root pose (F, 4, 4), the positions (F, m, 3) [m] and orientations
+    (F, m, 3, 3) of the tracked effectors ``names``; :meth:`at` makes one frame's targets when it is solved
+    (made all up front, 100k frames of targets took ~800 MB)."""
 
     world_from_root: np.ndarray
-    targets: list[dict[str, Target]]
     positions: np.ndarray
     rotations: np.ndarray
+    names: tuple[str, ...]
+    position_only: bool
+
+    def at(self, f: int) -> dict[str, Target]:
+        """The targets of frame ``f``."""
+        p, R = self.positions[f], self.rotations[f]
+        return {n: Target(p[k], None if self.position_only else R[k]) for k, n in enumerate(self.names)}
 
 
 def _clip_targets(motion: Motion, root_in_clip: int, names: tuple[str, ...], clip_frames: list[int],
                   position_only: bool) -> _ClipTargets:
-    """Targets and root poses from the clip's own forward kinematics."""
+    """Root poses and target positions and orientations from the clip's own forward kinematics."""
     F = motion.n_frames
     W = np.empty((F, 4, 4))
-    targets: list[dict[str, Target]] = []
     target_p = np.empty((F, len(names), 3))
     target_R = np.empty((F, len(names), 3, 3))
     for f in range(F):
@@ -227,8 +233,7 @@ def _clip_targets(motion: Motion, root_in_clip: int, names: tuple[str, ...], cli
         W[f] = transform(R[root_in_clip], p[root_in_clip])
         target_p[f] = p[clip_frames]
         target_R[f] = R[clip_frames]
-        targets.append({n: Target(p[c], None if position_only else R[c]) for n, c in zip(names, clip_frames)})
-    return _ClipTargets(W, targets, target_p, target_R)
+    return _ClipTargets(W, target_p, target_R, names, position_only)
 
 
 def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int):
@@ -236,19 +241,20 @@ def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int):
 
     Returns ``(Q (F, n_dofs) [rad], seconds (F,), steps (F,), statuses)``.
     """
-    F = len(clip.targets)
+    F = len(clip.world_from_root)
     Q = np.empty((F, solver.skeleton.n_dofs))
     seconds = np.empty(F)
     steps = np.zeros(F, dtype=np.int64)
     statuses: list[Status] = []
     for f in range(F):
+        targets = clip.at(f)
         start = time.perf_counter()
         if f == 0:
-            result = solver.solve(clip.targets[0])
+            result = solver.solve(targets)
             steps[f] = result.iterations
         else:
             solver.set_world_from_root(clip.world_from_root[f])
-            solver.set_targets(clip.targets[f])
+            solver.set_targets(targets)
             for k in range(steps_per_frame):
                 result = solver.step()
                 steps[f] = k + 1
