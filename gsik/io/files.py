@@ -8,16 +8,28 @@ import secrets
 import stat
 import time
 
-from gsik.errors import GsikFileError
+from gsik.errors import GsikFileError, show_value
+
+
+#: Longest path quoted whole in a message [characters].
+MAX_PATH_CHARS = 240
 
 
 def read_bytes(path: str | os.PathLike, what: str = "file") -> bytes:
     """The bytes of a file, or :class:`GsikFileError` naming ``what``, the path and the reason."""
+    _check_path(path, f"cannot read {what}")
     try:
         with open(path, "rb") as f:
             return f.read()
     except OSError as exc:
         raise file_error(f"cannot read {what}", path, exc) from exc
+
+
+def _check_path(path: str | os.PathLike, action: str) -> None:
+    """Refuse a path no file system takes (a NUL character) as a :class:`GsikFileError`, not a ``ValueError``."""
+    if "\x00" in os.fspath(path):
+        raise GsikFileError(f"{action} {show_value(os.fspath(path), MAX_PATH_CHARS)}: a path cannot hold a NUL "
+                            "character")
 
 
 def read_text(path: str | os.PathLike, what: str = "file", encoding: str = "utf-8",
@@ -40,12 +52,13 @@ def read_text(path: str | os.PathLike, what: str = "file", encoding: str = "utf-
     except UnicodeDecodeError as exc:
         if fallback is not None:
             return data.decode(fallback)
-        raise GsikFileError(f"cannot read {what} {os.fspath(path)!r}: not UTF-8 text ({exc.reason})") from None
+        raise GsikFileError(f"cannot read {what} {show_value(os.fspath(path), MAX_PATH_CHARS)}: not UTF-8 text "
+                            f"({exc.reason})") from None
 
 
 def file_error(action: str, path: str | os.PathLike, exc: OSError) -> GsikFileError:
     reason = exc.strerror or str(exc) or type(exc).__name__
-    err = GsikFileError(f"{action} {os.fspath(path)!r}: {reason}")
+    err = GsikFileError(f"{action} {show_value(os.fspath(path), MAX_PATH_CHARS)}: {reason}")
     err.errno, err.filename = exc.errno, os.fspath(path)
     return err
 
@@ -83,6 +96,7 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     Raises:
         GsikFileError: the file cannot be written.
     """
+    _check_path(path, "cannot write")
     target = os.path.realpath(os.fspath(path))  # through symbolic links: replace the file, not the link
     directory, base = os.path.split(target)
     try:
@@ -92,8 +106,8 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     except OSError as exc:
         raise file_error("cannot write", path, exc) from exc
     if mode is not None and (not mode & stat.S_IWUSR or not os.access(target, os.W_OK)):
-        err = GsikFileError(f"cannot write {os.fspath(path)!r}: the file is read-only (make it writable, or save "
-                            "under another name)")
+        err = GsikFileError(f"cannot write {show_value(os.fspath(path), MAX_PATH_CHARS)}: the file is read-only "
+                            "(make it writable, or save under another name)")
         err.errno, err.filename = errno.EACCES, os.fspath(path)
         raise err
     _remove_stale_temporaries(directory, base)
