@@ -256,4 +256,32 @@ class _Builder:
         return value
 
 
-__all__ = ["MAX_CHARS", "MAX_DEPTH", "MAX_INT", "MAX_VALUES", "YamlDocument", "load_yaml"]
+# -- writing names ---------------------------------------------------------------------------------------------
+
+_PLAIN_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
+
+
+def yaml_string(text: str) -> str:
+    """``text`` as a YAML scalar that :func:`load_yaml` reads back as exactly ``text``, key or value.
+
+    A plain identifier-like name (``left_hand``, ``waist.x``) stays plain unless YAML would read it as something
+    else (``null``, ``true``, ``on``); anything else is double-quoted with escapes for quotes, backslashes, line
+    breaks and control characters, so names of any characters survive a save. (A lone surrogate is escaped too,
+    but libyaml refuses to read it back: it is not text, and skeletons refuse such names.)
+    """
+    if _PLAIN_NAME.fullmatch(text) and _resolver.resolve(ScalarNode, text, (True, False)) == _STR:
+        return text
+    return '"' + "".join(_escape(c) for c in text) + '"'
+
+
+def _escape(c: str) -> str:
+    code = ord(c)
+    if c in '"\\':
+        return "\\" + c
+    if 0x20 <= code <= 0x7E or (0xA0 <= code <= 0xFFFD and code not in (0x2028, 0x2029, 0xFEFF)
+                                and not 0xD800 <= code <= 0xDFFF) or code >= 0x10000:
+        return c
+    return f"\\x{code:02X}" if code < 0x100 else f"\\u{code:04X}"
+
+
+__all__ = ["MAX_CHARS", "MAX_DEPTH", "MAX_INT", "MAX_VALUES", "YamlDocument", "load_yaml", "yaml_string"]

@@ -8,7 +8,7 @@ import pytest
 
 import gsik
 from gsik.skeleton import JointSpec, RotationSpec, SiteSpec
-from gsik.skeleton_builder import MAX_DOFS, MAX_FRAMES
+from gsik.skeleton_builder import MAX_DOFS, MAX_FRAMES, MAX_NAME_CHARS
 
 
 def _chain(n_joints: int, rotations_each: int = 1) -> list[JointSpec]:
@@ -48,3 +48,16 @@ def test_ancestry_is_every_frame_and_those_above_it(biped):
             a = int(biped.frame_parent[a])
     np.testing.assert_array_equal(biped.ancestry, reference)
     assert not biped.ancestry.flags.writeable
+
+
+@pytest.mark.parametrize("name, words", [("n" * (MAX_NAME_CHARS + 1), f"the limit is {MAX_NAME_CHARS}"),
+                                         ("bad\udc80", "lone surrogate"), ("", "non-empty string")])
+def test_names_a_pose_file_could_not_hold_are_refused(name, words):
+    with pytest.raises(gsik.SkeletonError, match=words):
+        gsik.build_skeleton("s", [JointSpec("top", None, (0.0, 0.0, 0.0))], [SiteSpec(name, "top", (0.0, 0.0, 0.0))])
+
+
+def test_a_dof_name_over_the_limit_is_refused():
+    rot = RotationSpec((1.0, 0.0, 0.0), -1.0, 1.0, 0.0, "x" * MAX_NAME_CHARS)
+    with pytest.raises(gsik.SkeletonError, match="degree of freedom name"):
+        gsik.build_skeleton("s", [JointSpec("top", None, (0.0, 0.0, 0.0), (rot,))])

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from fuzzing import HOSTILE, TOKENS, mutate, seeds
 from gsik.errors import GsikError, PoseError, SkeletonError
-from gsik.io.yaml_safe import MAX_CHARS, MAX_DEPTH, MAX_INT, load_yaml
+from gsik.io.yaml_safe import MAX_CHARS, MAX_DEPTH, MAX_INT, load_yaml, yaml_string
 from gsik.errors import MAX_VALUE_CHARS, choices, show_value
 
 
@@ -178,6 +178,29 @@ def test_mutated_gsik_files_are_read_or_refused_as_gsik_errors():
             assert len(str(exc)) < 400
             counts["refused"] += 1
     assert counts["read"] > 100 and counts["refused"] > 100, counts  # both paths exercised
+
+
+# -- names of any characters written so they read back exactly ------------------------------------------------
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(max_size=300))
+def test_any_name_is_written_so_it_reads_back_exactly_as_key_and_value(name):
+    text = yaml_string(name)
+    assert "\n" not in text and "\r" not in text
+    assert load_yaml(f"{text}: {text}\n", "n.yaml", PoseError).data == {name: name}
+    assert load_yaml(f"- {text}\n", "n.yaml", PoseError).data == [name]
+
+
+@pytest.mark.parametrize("name", ["[root]", "{x}", "'q", '"d', "|p", ">g", "%h", "@at", "`t", "a: b", "#c", "-", "- x",
+                                  "*star", "&amp", "!bang", "? q", "=", "~", "null", "Null", "true", "on", "No", "1.5",
+                                  "0x10", "1e3", "2001-12-14", "<<", "", " lead", "trail ", "tab\t", "new\nline",
+                                  "\x85", "\u2028", "\u2029", "\ufeffbom", "\x00", "\x7f", "\U0001F9B4", "caf\u00e9", "..."])
+def test_names_yaml_would_misread_are_quoted_and_read_back(name):
+    assert load_yaml(f"{yaml_string(name)}: 1\n", "n.yaml", PoseError).data == {name: 1}
+
+
+def test_plain_names_stay_plain():
+    assert [yaml_string(n) for n in ("left_hand", "waist.x", "Hips", "j-1")] == ["left_hand", "waist.x", "Hips", "j-1"]
 
 
 # -- bounded message values ----------------------------------------------------------
