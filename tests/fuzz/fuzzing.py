@@ -224,3 +224,31 @@ def _outcome(read: Callable, path: str) -> str:
 def print_bomb_figures() -> None:
     import json
     print(json.dumps(measure_bombs()))
+
+
+def big_bvh_text(n_frames: int, n_joints: int = 10) -> str:
+    """A BVH clip of ``n_frames`` frames: a 6-channel root and ``n_joints`` 3-channel joints, 4 decimals a value."""
+    import numpy as np
+    lines = ["HIERARCHY", "ROOT hips", "{", "  OFFSET 0 0 0",
+             "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"]
+    for i in range(n_joints):
+        lines += [f"  JOINT j{i}", "  {", "    OFFSET 0 1 0", "    CHANNELS 3 Zrotation Xrotation Yrotation",
+                  "    End Site", "    {", "      OFFSET 0 1 0", "    }", "  }"]
+    lines += ["}", "MOTION", f"Frames: {n_frames}", "Frame Time: 0.0333333"]
+    row = " ".join(f"{v:.4f}" for v in np.random.default_rng(0).uniform(-180, 180, 6 + 3 * n_joints))
+    return "\n".join(lines) + "\n" + (row + "\n") * n_frames
+
+
+def print_bvh_figures(n_frames: int) -> None:
+    """Parse a large BVH text and print its size, time and the process's memory growth (run in a fresh process)."""
+    import json
+    import resource
+    from gsik.io.bvh import parse_bvh
+    text = big_bvh_text(n_frames)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    start = time.perf_counter()
+    clip = parse_bvh(text, "big.bvh")
+    seconds = time.perf_counter() - start
+    growth = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
+    print(json.dumps({"frames": clip.n_frames, "channels": clip.motion.shape[1], "file_mb": len(text) / 2**20,
+                      "seconds": seconds, "growth_mb": growth}))
