@@ -53,14 +53,14 @@ from types import MappingProxyType
 from typing import Any, NamedTuple
 
 import numpy as np
-import yaml
 
 from gsik import validate
-from gsik.errors import PoseError, choices
+from gsik.errors import PoseError, choices, show_value
 from gsik.io.files import atomic_write_text, read_text
+from gsik.io.yaml_safe import load_yaml, yaml_string
 from gsik.rotations import matrix_from_quaternion, transform
 from gsik.skeleton import Skeleton
-from gsik.targets import Target
+from gsik.targets import MAX_COORDINATE, MAX_WEIGHT, Target
 
 #: The version of the pose format this module reads and writes.
 POSE_FORMAT = 1
@@ -70,6 +70,9 @@ QUATERNION_NORM_TOLERANCE = 0.01
 
 #: Angles within this of a limit [rad] count as inside it (no warning).
 LIMIT_TOLERANCE = 1e-9
+
+#: What a pose's ``skeleton:`` field ends in when it names a skeleton file instead of a bundled skeleton.
+SKELETON_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".bvh")
 
 _TOP_KEYS = ("format", "skeleton", "root", "root_transform", "joints", "targets")
 _TRANSFORM_KEYS = ("position", "orientation")
@@ -114,12 +117,12 @@ class Pose:
         joints = {}
         for name, value in dict(self.joints).items():
             if type(value) is not float or not math.isfinite(value):
-                value = _floats([value], 1, f"joint {name!r}")[0]
+                value = _floats([value], 1, f"joint {show_value(name)}")[0]
             joints[str(name)] = value
         targets = {}
         for name, t in dict(self.targets).items():
             if not isinstance(t, Target):
-                raise PoseError(f"target {name!r} must be a gsik.Target, got {type(t).__name__}")
+                raise PoseError(f"target {show_value(name)} must be a gsik.Target, got {type(t).__name__}")
             targets[str(name)] = t
         object.__setattr__(self, "joints", MappingProxyType(joints))
         object.__setattr__(self, "targets", MappingProxyType(targets))
@@ -129,7 +132,7 @@ class Pose:
         try:
             return np.array([self.joints[n] for n in skeleton.dof_names])
         except KeyError as exc:
-            raise PoseError(f"pose has no angle for {exc.args[0]!r}") from None
+            raise PoseError(f"pose has no angle for {show_value(exc.args[0])}") from None
 
     @property
     def world_from_root(self) -> np.ndarray:
@@ -160,24 +163,6 @@ class PoseRead(NamedTuple):
 
 # -- reading -----------------------------------------------------------------
 
-def _key_lines(node: yaml.Node, path: tuple, lines: dict, where: str) -> None:
-    """Record the 1-based line of every mapping key / sequence item; reject duplicate keys."""
-    lines[path] = node.start_mark.line + 1
-    if isinstance(node, yaml.MappingNode):
-        seen: dict[Any, int] = {}
-        for key_node, value_node in node.value:
-            key = key_node.value if isinstance(key_node, yaml.ScalarNode) else None
-            line = key_node.start_mark.line + 1
-            if key in seen:
-                raise PoseError(f"{where}:{line}: duplicate key {key!r} (first at line {seen[key]})")
-            seen[key] = line
-            _key_lines(value_node, path + (key,), lines, where)
-            lines[path + (key,)] = line  # the key's line, not its value's
-    elif isinstance(node, yaml.SequenceNode):
-        for i, item in enumerate(node.value):
-            _key_lines(item, path + (i,), lines, where)
-
-
 class _Reader:
     """Validates parsed YAML, naming file, line and field in every error."""
 
@@ -205,7 +190,7 @@ class _Reader:
         """Names only, none unknown, none of ``required`` missing."""
         keys = [k for k in value if not isinstance(k, str)]
         if keys:
-            self.fail(path, f"keys must be names, got {keys[0]!r}")
+            self.fail(path, f"keys must be names, got {_show(keys[0])}")
         unknown = [k for k in value if k not in required + optional]
         if unknown:
             self.fail(path + (unknown[0],), f"unknown field; valid fields: {choices(required + optional)}")
@@ -216,15 +201,25 @@ class _Reader:
     def number(self, value, path: tuple) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             self.fail(path, f"must be a number, got {_show(value)}")
-        v = float(value)
+        try:
+            v = float(value)
+        except OverflowError:  # an integer beyond float's range
+            v = math.inf
         if not math.isfinite(v):
-            self.fail(path, f"must be a finite number, got {value!r}")
+            self.fail(path, f"must be a finite number, got {_show(value)}")
         return v
 
     def vector(self, value, n: int, path: tuple) -> tuple[float, ...]:
         if not isinstance(value, list) or len(value) != n:
             self.fail(path, f"must be a list of {n} numbers, got {_show(value)}")
         return tuple(self.number(v, path + (i,)) for i, v in enumerate(value))
+
+    def position(self, value, path: tuple) -> tuple[float, ...]:
+        """A world position [m] within :data:`gsik.targets.MAX_COORDINATE` of the origin."""
+        p = self.vector(value, 3, path)
+        if max(abs(v) for v in p) > MAX_COORDINATE:
+            self.fail(path, f"must be within {MAX_COORDINATE:g} m of the origin in x, y and z, got {list(p)}")
+        return p
 
     def quaternion(self, value, path: tuple) -> tuple[float, ...]:
         q = self.vector(value, 4, path)
@@ -247,10 +242,51 @@ class _Reader:
 
 
 def _show(value) -> str:
-    if value is None:
-        return "nothing"
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+    return "nothing" if value is None else show_value(value)
+
+
+class PoseDocument(NamedTuple):
+    """A pose file read and parsed once (bounded: :func:`gsik.io.yaml_safe.load_yaml`), not yet checked against
+    a skeleton.
+
+    Attributes:
+        source: The file's path (or a label), named in messages.
+        data: The parsed YAML (a mapping for a pose).
+        lines: The line of every place in ``data``.
+    """
+
+    source: str
+    data: Any
+    lines: dict
+
+    @property
+    def skeleton(self) -> str | None:
+        """The ``skeleton:`` field: a bundled skeleton's name, or a skeleton file's path (``.yaml``, ``.urdf``,
+        ``.bvh``) made relative to the pose file's folder; ``None`` when the field is missing or not a name."""
+        name = self.data.get("skeleton") if isinstance(self.data, dict) else None
+        if not isinstance(name, str) or not name:
+            return None
+        if _names_a_file(name) and not os.path.isabs(name) and not self.source.startswith("<"):
+            return os.path.join(os.path.dirname(self.source), name)
+        return name
+
+
+def _names_a_file(name: str) -> bool:
+    """True if a pose's ``skeleton:`` field is a path to a skeleton file rather than a skeleton's name."""
+    return os.path.splitext(name)[1].lower() in SKELETON_FILE_SUFFIXES or "/" in name or os.sep in name
+
+
+def parse_pose(text: str, source: str = "<pose>") -> PoseDocument:
+    """Parse pose YAML once; YAML errors, and anything the bounded reader refuses, become :class:`PoseError`."""
+    doc = load_yaml(text, source, PoseError)
+    if doc.data is None:
+        raise PoseError(f"{source}: empty file, expected a gsik pose (format: {POSE_FORMAT})")
+    return PoseDocument(source, doc.data, doc.lines)
+
+
+def read_pose_document(path: str | os.PathLike) -> PoseDocument:
+    """Read and parse a pose file once (:class:`GsikFileError` if it cannot be read)."""
+    return parse_pose(read_text(path, "pose file"), os.fspath(path))
 
 
 def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> PoseRead:
@@ -267,13 +303,17 @@ def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> Pos
     Raises:
         PoseError: naming ``source``, the line, the field and the bad value.
     """
-    data, lines = _parse(text, source)
-    r = _Reader(source, lines)
-    top = r.mapping(data, (), _TOP_KEYS)
+    return pose_from_document(parse_pose(text, source), skeleton)
+
+
+def pose_from_document(doc: PoseDocument, skeleton: Skeleton) -> PoseRead:
+    """Validate a parsed pose file for ``skeleton`` (see :func:`pose_from_yaml`)."""
+    r = _Reader(doc.source, doc.lines)
+    top = r.mapping(doc.data, (), _TOP_KEYS)
     _check_header(r, top, skeleton)
     root = _read_root(r, top["root"], skeleton)
     rt = r.mapping(top["root_transform"], ("root_transform",), _TRANSFORM_KEYS)
-    root_position = r.vector(rt["position"], 3, ("root_transform", "position"))
+    root_position = r.position(rt["position"], ("root_transform", "position"))
     root_orientation = r.quaternion(rt["orientation"], ("root_transform", "orientation"))
     joints, warnings = _read_joints(r, top["joints"], skeleton)
     targets = _read_targets(r, top["targets"], tuple(n for n in skeleton.effector_sites if n != root), root)
@@ -281,27 +321,8 @@ def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> Pos
     return PoseRead(pose, tuple(warnings))
 
 
-def _parse(text: str, source: str) -> tuple[Any, dict]:
-    """The YAML data and the line of every key path; YAML errors become :class:`PoseError`."""
-    try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.load(text, Loader=yaml.SafeLoader)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line = f":{mark.line + 1}" if mark is not None else ""
-        problem = exc.problem or exc.context or "malformed YAML"
-        raise PoseError(f"{source}{line}: not valid YAML: {problem}") from None
-    except yaml.YAMLError as exc:
-        raise PoseError(f"{source}: not valid YAML: {exc}") from None
-    if node is None:
-        raise PoseError(f"{source}: empty file, expected a gsik pose (format: {POSE_FORMAT})")
-    lines: dict = {}
-    _key_lines(node, (), lines, source)
-    return data, lines
-
-
 def _check_header(r: _Reader, top: dict, skeleton: Skeleton) -> None:
-    """The format version and the skeleton's name."""
+    """The format version and the skeleton's name (or its file's path: then the joints and effectors must fit)."""
     fmt = top["format"]
     if isinstance(fmt, bool) or not isinstance(fmt, int):
         r.fail(("format",), f"must be the whole number {POSE_FORMAT}, got {_show(fmt)}")
@@ -309,14 +330,14 @@ def _check_header(r: _Reader, top: dict, skeleton: Skeleton) -> None:
         newer = " (written by a newer gsik?)" if fmt > POSE_FORMAT else ""
         r.fail(("format",), f"unsupported pose format {fmt}{newer}; this gsik reads format {POSE_FORMAT}")
     name = r.name(top["skeleton"], ("skeleton",))
-    if name != skeleton.name:
-        r.fail(("skeleton",), f"pose is for skeleton {name!r}, but the skeleton is {skeleton.name!r}")
+    if name != skeleton.name and not _names_a_file(name):
+        r.fail(("skeleton",), f"pose is for skeleton {_show(name)}, but the skeleton is {_show(skeleton.name)}")
 
 
 def _read_root(r: _Reader, value, skeleton: Skeleton) -> str:
     root = r.name(value, ("root",))
     if root not in skeleton.joint_names and root not in skeleton.site_names:
-        r.fail(("root",), f"unknown root {root!r}; valid: {choices(skeleton.effector_sites)} "
+        r.fail(("root",), f"unknown root {_show(root)}; valid: {choices(skeleton.effector_sites)} "
                           f"(or any joint or site: {choices(skeleton.joint_names + skeleton.site_names)})")
     return root
 
@@ -326,7 +347,7 @@ def _require_names(r: _Reader, given: dict, field: str, valid: tuple[str, ...], 
     """Every key of ``given`` is one of ``valid`` and every one of ``valid`` is given; ``what``: (key, value) nouns."""
     for key in given:
         if key not in valid:
-            r.fail((field, key), f"unknown {what[0]} {key!r}{why(key)}; valid: {choices(valid)}")
+            r.fail((field, key), f"unknown {what[0]} {_show(key)}{why(key)}; valid: {choices(valid)}")
     missing = [n for n in valid if n not in given]
     if missing:
         r.fail((field,), f"missing {what[1]}(s) for {choices(missing)}")
@@ -361,10 +382,10 @@ def _read_targets(r: _Reader, targets_in, effectors: tuple[str, ...], root: str)
 def _read_target(r: _Reader, value, path: tuple) -> Target:
     t = r.mapping(value, path, _TARGET_KEYS[:2], _TARGET_KEYS[2:])
     weight = r.number(t.get("weight", 1.0), path + ("weight",))
-    if weight < 0:
-        r.fail(path + ("weight",), f"must be >= 0, got {weight!r}")
+    if not 0 <= weight <= MAX_WEIGHT:
+        r.fail(path + ("weight",), f"must be >= 0 and at most {MAX_WEIGHT:g}, got {weight!r}")
     return Target(
-        position=r.vector(t["position"], 3, path + ("position",)),
+        position=r.position(t["position"], path + ("position",)),
         orientation=r.quaternion(t["orientation"], path + ("orientation",)),
         weight=weight,
         position_only=r.flag(t.get("position_only", False), path + ("position_only",)),
@@ -379,7 +400,7 @@ def read_pose(path: str | os.PathLike, skeleton: Skeleton) -> PoseRead:
         GsikFileError: the file cannot be read.
         PoseError: the file is not a valid pose for ``skeleton`` (see the module docstring).
     """
-    return pose_from_yaml(read_text(path, "pose file"), skeleton, os.fspath(path))
+    return pose_from_document(read_pose_document(path), skeleton)
 
 
 # -- writing -----------------------------------------------------------------
@@ -396,31 +417,23 @@ def _list(values) -> str:
     return "[" + ", ".join(_num(v) for v in values) + "]"
 
 
-def _name(text: str) -> str:
-    """A YAML key or value for a name: plain when it reads back as the same string, else quoted."""
-    plain = yaml.safe_load(f"{text}: 0") if text else None
-    if isinstance(plain, dict) and list(plain) == [text]:
-        return text
-    return yaml.safe_dump(text, default_style='"').strip().removesuffix("...").strip()
-
-
 def pose_to_yaml(pose: Pose) -> str:
     """The YAML text of ``pose`` (the format of the module docstring)."""
     out = [
         "# gsik pose (format documented in gsik/pose.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
         f"format: {POSE_FORMAT}",
-        f"skeleton: {_name(pose.skeleton)}",
-        f"root: {_name(pose.root)}",
+        f"skeleton: {yaml_string(pose.skeleton)}",
+        f"root: {yaml_string(pose.root)}",
         "root_transform:",
         f"  position: {_list(pose.root_position)}",
         f"  orientation: {_list(pose.root_orientation)}",
         "joints:",
     ]
-    out += [f"  {_name(n)}: {_num(v)}" for n, v in pose.joints.items()]
+    out += [f"  {yaml_string(n)}: {_num(v)}" for n, v in pose.joints.items()]
     out.append("targets:" if pose.targets else "targets: {}")
     for n, t in pose.targets.items():
         out += [
-            f"  {_name(n)}:",
+            f"  {yaml_string(n)}:",
             f"    position: {_list(t.position)}",
             f"    orientation: {_list(t.orientation)}",
             f"    enabled: {'true' if t.enabled else 'false'}",
