@@ -10,6 +10,7 @@ frame's ``dq`` is the next frame's starting guess (warm start).
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Mapping
 from dataclasses import replace
 from typing import NamedTuple
@@ -191,6 +192,7 @@ class Solver:
         self._state = np.zeros(sk.n_dofs + 2 * m)
         self._q = self._state[: sk.n_dofs]
         self._q[:] = q
+        self._q_before = np.empty(sk.n_dofs)  # a step's starting angles, to undo a non-finite step
         self._ws = kernels.make_workspace(sk.n_frames, sk.n_dofs, m, err=self._state[sk.n_dofs:].reshape(2, m))
         self._ws.lam[0] = lam
         self._inputs = None
@@ -340,15 +342,15 @@ class Solver:
         if targets is not None:
             self.set_targets(targets)
         step, inputs = self._inputs or self._kernel_inputs()
-        before = self._q.copy()
+        self._q_before[:] = self._q
         step(*inputs)
-        self._refuse_non_finite(before, self._ws.stats)
+        self._refuse_non_finite(self._q_before, self._ws.stats)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
 
     def _refuse_non_finite(self, before: np.ndarray, stats: np.ndarray) -> None:
         """Undo a step that left a non-finite angle or error (status :attr:`Status.REFUSED`): the solver is never
         poisoned, the pose stays the last finite one."""
-        if np.isfinite(self._state).all():  # angles and errors: one buffer
+        if math.isfinite(self._state @ self._state):  # angles and errors, one buffer: finite unless one is not
             return
         self._q[:] = before
         self._ws.x[:] = 0.0
