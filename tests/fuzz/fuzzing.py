@@ -252,3 +252,43 @@ def print_bvh_figures(n_frames: int) -> None:
     growth = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
     print(json.dumps({"frames": clip.n_frames, "channels": clip.motion.shape[1], "file_mb": len(text) / 2**20,
                       "seconds": seconds, "growth_mb": growth}))
+
+
+def fuzz_solver(n: int, seed: int = 0) -> dict[str, int]:
+    """``n`` solver calls on random extreme input (targets at and beyond the limits, extreme weights, huge root
+    placements); counts refusals at the edge and calls that left a non-finite or out-of-limits pose."""
+    import numpy as np
+    rng = random.Random(seed)
+    biped = gsik.load_skeleton("biped")
+    solver = gsik.Solver(biped)
+    allowed = [0.0, 1e-300, 5e-324, 0.5, -1.0, 1e3, 1e6, -1e6]
+    beyond = [1e6 + 1, 1e154, 1e300, float("nan"), float("inf")]
+
+    def extreme() -> float:
+        return rng.choice(beyond if rng.random() < 0.03 else allowed)
+
+    counts = {"calls": 0, "refused at the edge": 0, "steps refused (Status.REFUSED)": 0, "poisoned": 0}
+    for _ in range(n):
+        name = rng.choice(solver.effector_names)
+        try:
+            if rng.random() < 0.1:
+                W = np.eye(4)
+                W[:3, 3] = [extreme() for _ in range(3)]
+                if rng.random() < 0.5:
+                    W[:3, :3] *= extreme()
+                solver.set_world_from_root(W)
+            target = gsik.Target([extreme() for _ in range(3)], weight=extreme())
+            result = solver.solve({name: target}) if rng.random() < 0.2 else solver.step({name: target})
+        except gsik.GsikError:
+            counts["refused at the edge"] += 1
+            continue
+        counts["calls"] += 1
+        counts["steps refused (Status.REFUSED)"] += result.status is gsik.Status.REFUSED
+        q = solver.q
+        finite_errors = np.isfinite(result.position_errors).all() and np.isfinite(result.orientation_errors).all()
+        poisoned = (not np.isfinite(q).all() or np.any(q < biped.lower - 1e-9) or np.any(q > biped.upper + 1e-9)
+                    or (result.status is gsik.Status.CONVERGED and not finite_errors))
+        counts["poisoned"] += bool(poisoned)
+        if rng.random() < 0.05:
+            solver.set_world_from_root(np.eye(4))
+    return counts
