@@ -60,17 +60,7 @@ def run_kills(n: int, seed: int) -> int:
         atomic_write_text(path, old)
         left = []
         for _ in range(n):
-            pid = os.fork()
-            if pid == 0:
-                try:
-                    while True:
-                        atomic_write_text(path, new)
-                        atomic_write_text(path, old)
-                finally:
-                    os._exit(0)
-            time.sleep(rng.uniform(0.001, 0.03))
-            os.kill(pid, 9)
-            os.waitpid(pid, 0)
+            fuzzing.kill_during_saves(path, old, new, rng)
             torn += path.read_text() not in (old, new)
             left.append(sum(f.endswith(".tmp") for f in os.listdir(folder)))
         atomic_write_text(path, "done\n")

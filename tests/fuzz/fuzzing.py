@@ -292,3 +292,23 @@ def fuzz_solver(n: int, seed: int = 0) -> dict[str, int]:
         if rng.random() < 0.05:
             solver.set_world_from_root(np.eye(4))
     return counts
+
+
+def kill_during_saves(path, old: str, new: str, rng: random.Random) -> int:
+    """Fork a process that saves ``new`` and ``old`` to ``path`` in turn; SIGKILL it after a random few
+    milliseconds. Returns the dead writer's process id."""
+    import os
+    import signal
+    from gsik.io.files import atomic_write_text
+    pid = os.fork()
+    if pid == 0:  # the writer: never returns into the caller
+        try:
+            while True:
+                atomic_write_text(path, new)
+                atomic_write_text(path, old)
+        finally:
+            os._exit(0)
+    time.sleep(rng.uniform(0.001, 0.03))
+    os.kill(pid, signal.SIGKILL)
+    os.waitpid(pid, 0)
+    return pid

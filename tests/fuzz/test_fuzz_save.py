@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import os
 import random
-import signal
 import stat
 import time
 
 import pytest
 
+from fuzzing import kill_during_saves
 from gsik.errors import GsikFileError
 from gsik.io.files import atomic_write_text
 
@@ -21,19 +21,7 @@ NEW = "new\n" * 120_000
 
 
 def _kill_during_saves(path, rng: random.Random) -> int:
-    """Fork a process that saves OLD and NEW in turn, and SIGKILL it after a random few milliseconds."""
-    pid = os.fork()
-    if pid == 0:  # the writer: never returns into pytest
-        try:
-            while True:
-                atomic_write_text(path, NEW)
-                atomic_write_text(path, OLD)
-        finally:
-            os._exit(0)
-    time.sleep(rng.uniform(0.001, 0.03))
-    os.kill(pid, signal.SIGKILL)
-    os.waitpid(pid, 0)
-    return pid
+    return kill_during_saves(path, OLD, NEW, rng)
 
 
 def _temporaries(folder, name: str) -> list[str]:
