@@ -4,7 +4,7 @@ A pose file is plain YAML, readable and editable by hand::
 
     # gsik pose
     format: 1                   # version of this format
-    skeleton: biped             # the skeleton's name; must match the skeleton it is loaded on
+    skeleton: biped             # the skeleton's name, or its file's path (relative to this file)
     root: right_foot            # the IK root: a joint or site, pinned to the world
     root_transform:             # world transform of the root frame
       position: [0.09, 0.0505, 0.0]        # [m]
@@ -29,6 +29,9 @@ Rules:
 - ``format``, ``skeleton``, ``root``, ``root_transform``, ``joints`` and
   ``targets`` are required; so are every DOF of the skeleton and every
   effector of the root, each with ``position`` and ``orientation``.
+- The file is read once by :func:`gsik.io.yaml_safe.load_yaml` (bounded: no
+  alias bombs, no deep nesting, no huge numbers, no tags). Target positions
+  lie within ``MAX_COORDINATE`` of the origin, weights within ``MAX_WEIGHT``.
 - Unknown keys, unknown joints or effectors, a target for the root itself,
   NaN or infinite numbers and quaternions that are not of unit norm
   (within 1 %) are errors (:class:`gsik.PoseError`, naming the file, the
