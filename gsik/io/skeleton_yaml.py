@@ -175,7 +175,8 @@ def skeleton_from_dict(data, source: str = "<memory>", lines: dict | None = None
     check_size(0, len(joints_data), source)  # a joint is at least a frame: refuse a huge file before reading on
     joints = [_joint(top.child(jd, f"joints[{i}]", "joints", i), i) for i, jd in enumerate(joints_data)]
     sites = [_site(top.child(sd, f"sites[{i}]", "sites", i)) for i, sd in enumerate(_list(top, "sites"))]
-    segments = [_segment(top.child(sd, f"segments[{i}]", "segments", i)) for i, sd in enumerate(_list(top, "segments"))]
+    segments = [_segment(top.child(sd, f"segments[{i}]", "segments", i))
+                for i, sd in enumerate(_list(top, "segments"))]
     effectors = _list(top, "effectors")
     for i, e in enumerate(effectors):
         if not isinstance(e, str):
@@ -201,17 +202,24 @@ def _joint(f: _Fields, i: int) -> JointSpec:
 
 
 def _site(f: _Fields) -> SiteSpec:
-    f.check_keys(("name", "parent", "offset", "orientation"))
-    return SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)), f.orientation())
+    f.check_keys(("name", "parent", "offset", "orientation", "sole"))
+    sole = f.get("sole", None)
+    if sole is not None:
+        if not isinstance(sole, list) or not all(isinstance(c, (list, tuple)) and len(c) == 2 for c in sole):
+            f.fail(f"sole must be a list of [x, y] corners [m], got {show_value(sole)}", "sole")
+        sole = tuple((f.number(c[0], "sole x", "sole", i), f.number(c[1], "sole y", "sole", i))
+                     for i, c in enumerate(sole))
+    return SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)), f.orientation(), sole)
 
 
 def _segment(f: _Fields) -> SegmentSpec:
-    f.check_keys(("name", "from", "to"))
+    f.check_keys(("name", "from", "to", "mass", "com"))
     to = f.get("to")
     ends = [to] if isinstance(to, str) else to
     if not isinstance(ends, list) or not ends or not all(isinstance(e, str) and e for e in ends):
         f.fail(f"to must be a joint or site name or a list of them, got {show_value(to)}", "to")
-    return SegmentSpec(f.name(), f.name("from"), tuple(ends))
+    return SegmentSpec(f.name(), f.name("from"), tuple(ends), f.number(f.get("mass", 0.0), "mass", "mass"),
+                       f.number(f.get("com", 0.5), "com", "com"))
 
 
 def _list(top: _Fields, key: str) -> list:
