@@ -362,9 +362,12 @@ class Solver:
             self.set_targets(targets)
         if self._is_controlled:
             self._q_before[:] = self._q
-            result = self._control_step()
-            if math.isfinite(result.q @ result.q):
-                return result
+            try:
+                result = self._control_step()
+                if math.isfinite(result.q @ result.q):
+                    return result
+            except np.linalg.LinAlgError:  # its least squares met non-finite numbers
+                pass
             self._q[:] = self._q_before  # the prioritised step went non-finite: undo it as the plain one is undone
             self._refresh_frames()
             return self._control_result(Status.REFUSED, 1, math.inf, 0.0, 1)

@@ -105,3 +105,19 @@ def test_position_errors_do_not_overflow(biped):
     solver.set_world_from_root(far)
     result = solver.step({"left_hand": gsik.Target([-MAX_COORDINATE] * 3)})
     assert np.isfinite(result.position_errors).all() and result.position_errors.max() > 3e6
+
+
+def test_a_prioritised_step_that_would_go_non_finite_is_refused_too(biped):
+    solver = gsik.Solver(biped)
+    q = solver.q
+    huge = np.eye(4)
+    huge[:3, :3] *= 1e200
+    solver.set_world_from_root(huge)
+    with np.errstate(all="ignore"):
+        result = solver.step({"left_hand": gsik.Target([0.2, 0.2, 1.0], priority=0),
+                              "head": gsik.Target([0.0, 0.0, 1.6], priority=1)})
+    assert np.isfinite(solver.q).all()
+    if result.status is Status.REFUSED:
+        np.testing.assert_array_equal(solver.q, q)
+    solver.set_world_from_root(np.eye(4))
+    _sane(solver, solver.solve({"left_hand": gsik.Target([0.2, 0.2, 1.0])}))
