@@ -19,7 +19,6 @@ path does), so a held target settles at its best reach instead of jittering.
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np

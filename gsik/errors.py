@@ -8,6 +8,7 @@ so ``except ValueError`` keeps working for code that does not know gsik.
 
 from __future__ import annotations
 
+import reprlib
 from collections.abc import Iterable
 
 
@@ -66,6 +67,40 @@ class GsikFileError(GsikError, OSError):
         return str(self.args[0]) if self.args else super().__str__()
 
 
-def choices(names: Iterable[str]) -> str:
-    """Format valid names for an error message: ``'a', 'b', 'c'``."""
-    return ", ".join(repr(n) for n in names)
+# -- bounded message text: a value quoted in a message never makes the message long ------------------------------
+# A hostile file can hold a 20 MB name or a list of a million numbers; quoting it whole would make a 20 MB message
+# (and, for nested data, take unbounded time to format). Every value gsik quotes goes through show_value, every
+# list of valid names through choices.
+
+#: Longest quoted value in a message [characters].
+MAX_VALUE_CHARS = 80
+
+#: Most names a message lists before saying how many more there are.
+MAX_NAMES = 60
+
+_repr = reprlib.Repr()
+_repr.maxlevel = 3
+_repr.maxstring = _repr.maxother = MAX_VALUE_CHARS
+_repr.maxlong = 40
+_repr.maxlist = _repr.maxtuple = _repr.maxdict = _repr.maxset = _repr.maxfrozenset = _repr.maxdeque = 6
+_repr.maxarray = 6
+
+
+def show_value(value, limit: int = MAX_VALUE_CHARS) -> str:
+    """``repr(value)`` cut to at most ``limit`` characters (ending in ``...`` when cut).
+
+    Bounded in time and memory however large or deeply nested ``value`` is: a long string is cut before its
+    ``repr`` is made, a container shows its first few items.
+    """
+    if isinstance(value, str) and len(value) > limit:
+        text = repr(value[:limit]) + "..."
+    else:
+        text = _repr.repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def choices(names: Iterable, limit: int = MAX_NAMES) -> str:
+    """Valid names for an error message, ``'a', 'b', 'c'``; past ``limit`` names, ``..., and 88 more``."""
+    names = names if isinstance(names, (list, tuple)) else list(names)
+    shown = ", ".join(show_value(n) for n in names[:limit])
+    return f"{shown}, ... and {len(names) - limit} more" if len(names) > limit else shown

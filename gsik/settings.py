@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from numbers import Integral, Real
 from types import MappingProxyType
 
 import numpy as np
 
-from gsik.errors import SolverError
+from gsik.errors import SolverError, show_value
 from gsik.kernels import KernelSettings
 
 
@@ -16,6 +17,15 @@ from gsik.kernels import KernelSettings
 #: no step limit, no adaptive damping, no settling, no subspace minimisation.
 PAPER_METHOD = MappingProxyType(dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0,
                                      settle_tolerance=0.0))
+
+
+#: Largest value of each whole-number setting: far above any useful value, low enough that every call ends soon
+#: (a compiled loop cannot be interrupted, and NumPy's integers stop at int64).
+MAX_COUNTS = MappingProxyType(dict(sweeps=10_000, solve_sweeps=10_000, max_iterations=10_000, restarts=1_000,
+                                   seed=2**63 - 1))
+
+#: Largest value of a real-valued setting (weights, tolerances, damping, step): beyond it products overflow.
+MAX_SETTING = 1e6
 
 
 @dataclass(frozen=True)
@@ -56,7 +66,9 @@ class SolverSettings:
             one does not converge (a continuation, then random restarts).
         seed: Seed of the random restarts, so solves are repeatable.
 
-    :meth:`paper` gives the paper's plain method.
+    :meth:`paper` gives the paper's plain method. Every field is stored as a Python ``bool``, ``int`` or
+    ``float`` (a NumPy scalar is converted), whole numbers at most :data:`MAX_COUNTS`, reals at most
+    :data:`MAX_SETTING`.
     """
 
     damping: float = 1e-3
@@ -79,12 +91,13 @@ class SolverSettings:
 
     def __post_init__(self):
         for f in fields(self):
-            _check_setting(f.name, f.type, getattr(self, f.name))
+            object.__setattr__(self, f.name, _check_setting(f.name, f.type, getattr(self, f.name)))
         for name in ("sweeps", "max_iterations", "solve_sweeps"):
             if getattr(self, name) < 1:
                 raise SolverError(f"setting {name} must be at least 1, got {getattr(self, name)!r}")
         if self.damping <= 0:
-            raise SolverError(f"setting damping must be > 0 (it keeps J^T W J + delta I invertible), got {self.damping!r}")
+            raise SolverError(f"setting damping must be > 0 (it keeps J^T W J + delta I invertible), "
+                              f"got {self.damping!r}")
 
     @classmethod
     def paper(cls, **overrides) -> SolverSettings:
@@ -103,18 +116,28 @@ class SolverSettings:
         )
 
 
-def _check_setting(name: str, kind: str, v) -> None:
-    """One field: a bool, or a finite number >= 0 (whole for an int)."""
+def _check_setting(name: str, kind: str, v):
+    """One field as a Python value: a bool, or a finite number in [0, its maximum] (whole for an int)."""
     if kind == "bool":
         if not isinstance(v, (bool, np.bool_)):
-            raise SolverError(f"setting {name} must be True or False, got {v!r}")
-        return
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-        raise SolverError(f"setting {name} must be a number, got {v!r}")
-    if not math.isfinite(v) or v < 0:
-        raise SolverError(f"setting {name} must be finite and >= 0, got {v!r}")
-    if kind == "int" and int(v) != v:
-        raise SolverError(f"setting {name} must be a whole number, got {v!r}")
+            raise SolverError(f"setting {name} must be True or False, got {show_value(v)}")
+        return bool(v)
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, Real):
+        raise SolverError(f"setting {name} must be a number, got {show_value(v)}")
+    if kind == "int":
+        if not (isinstance(v, Integral) or float(v).is_integer()):
+            raise SolverError(f"setting {name} must be a whole number, got {show_value(v)}")
+        top = MAX_COUNTS[name]
+        if not 0 <= v <= top:
+            raise SolverError(f"setting {name} must be between 0 and {top:,}, got {show_value(v)}")
+        return int(v)
+    try:
+        x = float(v)
+    except OverflowError:  # an integer beyond float's range
+        x = math.inf
+    if not 0.0 <= x <= MAX_SETTING:  # NaN fails too
+        raise SolverError(f"setting {name} must be finite and >= 0 (at most {MAX_SETTING:g}), got {show_value(v)}")
+    return x
 
 
 def setting_names() -> tuple[str, ...]:

@@ -178,12 +178,12 @@ class Skeleton:
     @cached_property
     def ancestry(self) -> np.ndarray:
         """(n_frames, n_frames) bool: ``ancestry[a, f]`` if frame ``a`` is ``f`` or above it."""
-        anc = np.zeros((self.n_frames, self.n_frames), dtype=bool)
-        for f in range(self.n_frames):
-            a = f
-            while a >= 0:
-                anc[a, f] = True
-                a = int(self.frame_parent[a])
+        below = np.zeros((self.n_frames, self.n_frames), dtype=bool)  # below[f, a]: the transpose, row by row
+        for f, parent in enumerate(self.frame_parent.tolist()):  # parents come first: one row copy per frame
+            if parent >= 0:
+                below[f] = below[parent]
+            below[f, f] = True
+        anc = np.ascontiguousarray(below.T)
         anc.flags.writeable = False
         return anc
 
@@ -243,10 +243,12 @@ def build_skeleton(
             duplicate names, unknown parents, cycles, several tops, limits
             with ``lower > upper``, non-finite numbers, zero axes, unknown
             effectors, segment ends or root, negative masses, segments with
-            mass that span a moving joint, soles without area.
+            mass that span a moving joint, soles without area, and skeletons beyond
+            :data:`~gsik.skeleton_builder.MAX_DOFS` or :data:`~gsik.skeleton_builder.MAX_FRAMES`.
     """
     b = SkeletonBuilder(source)
     b.index_joints(joints)
+    b.check_size(joints, sites)
     b.check_sites(sites)
     b.order_joints(joints, b.top_joint(joints))
     for jname in b.order:

@@ -16,11 +16,33 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik.balance import convex_hull
-from gsik.errors import SkeletonError, choices
+from gsik.errors import SkeletonError, choices, show_value
 from gsik.rotations import is_rotation_matrix
 from gsik.validate import frozen, vector
 
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+#: Most degrees of freedom a skeleton may have: the solver's work arrays grow with the square of the DOF count and
+#: a step with its cube (2048 DOFs: ~1.5 s a step), so larger skeletons are refused when built, not when solved.
+MAX_DOFS = 2048
+
+#: Most frames (a joint without rotations, each one-DOF rotation, each site: one frame) a skeleton may have; the
+#: frame-to-frame ancestry table holds the square of it (8192 frames: 64 MB).
+MAX_FRAMES = 8192
+
+
+#: Longest joint, site or DOF name [characters]: names become keys of pose files, and YAML keys stop at 1024.
+MAX_NAME_CHARS = 256
+
+
+def check_size(n_dofs: int, n_frames: int, source: str) -> None:
+    """Refuse a skeleton beyond :data:`MAX_DOFS` or :data:`MAX_FRAMES` with a :class:`SkeletonError`."""
+    if n_dofs > MAX_DOFS:
+        raise SkeletonError(f"{source}: {n_dofs:,} degrees of freedom; gsik's dense solver takes at most "
+                            f"{MAX_DOFS:,} (its work grows with the square of the count)")
+    if n_frames > MAX_FRAMES:
+        raise SkeletonError(f"{source}: {n_frames:,} frames (joints, rotations and sites); gsik takes at most "
+                            f"{MAX_FRAMES:,}")
 
 
 @dataclass(frozen=True)
@@ -116,7 +138,7 @@ def _orientation(value, what: str) -> np.ndarray:
         return np.eye(3)
     R = np.asarray(value, dtype=float)
     if not is_rotation_matrix(R):
-        raise SkeletonError(f"{what} must be a rotation matrix, got {value!r}")
+        raise SkeletonError(f"{what} must be a rotation matrix, got {show_value(value)}")
     return R
 
 
@@ -182,20 +204,37 @@ class SkeletonBuilder:
         if not joints:
             self.fail("a skeleton needs at least one joint")
         for j in joints:
-            if not isinstance(j.name, str) or not j.name:
-                self.fail(f"joint name must be a non-empty string, got {j.name!r}")
+            self.check_name(j.name, "joint name")
             if j.name in self.by_name:
-                self.fail(f"duplicate joint name {j.name!r}")
+                self.fail(f"duplicate joint name {show_value(j.name)}")
             self.by_name[j.name] = j
+
+    def check_name(self, name, what: str) -> None:
+        """A non-empty string of at most :data:`MAX_NAME_CHARS` characters that is text (no lone surrogates)."""
+        if not isinstance(name, str) or not name:
+            self.fail(f"{what} must be a non-empty string, got {show_value(name)}")
+        if len(name) > MAX_NAME_CHARS:
+            self.fail(f"{what} {show_value(name)} is {len(name):,} characters long; the limit is {MAX_NAME_CHARS}")
+        try:
+            name.encode("utf-8")
+        except UnicodeEncodeError:
+            self.fail(f"{what} {show_value(name)} is not text (it holds a lone surrogate)")
+
+    def check_size(self, joints: Sequence[JointSpec], sites: Sequence[SiteSpec]) -> None:
+        """Within :data:`MAX_DOFS` and :data:`MAX_FRAMES`, before any table is filled."""
+        n_dofs = sum(len(j.rotations) for j in joints)
+        check_size(n_dofs, n_dofs + sum(not j.rotations for j in joints) + len(sites), self.source)
 
     def check_sites(self, sites: Sequence[SiteSpec]) -> None:
         """Site names unique among joints and sites, each site hung on a joint."""
         counts = Counter(s.name for s in sites)
         for s in sites:
+            self.check_name(s.name, "site name")
             if s.name in self.by_name or counts[s.name] > 1:
-                self.fail(f"duplicate name {s.name!r} (joint and site names share one namespace)")
+                self.fail(f"duplicate name {show_value(s.name)} (joint and site names share one namespace)")
             if s.parent not in self.by_name:
-                self.fail(f"site {s.name!r}: parent {s.parent!r} is not a joint; joints: {choices(self.by_name)}")
+                self.fail(f"site {show_value(s.name)}: parent {show_value(s.parent)} is not a joint; "
+                          f"joints: {choices(self.by_name)}")
         self.site_names = [s.name for s in sites]
 
     def top_joint(self, joints: Sequence[JointSpec]) -> str:
@@ -203,7 +242,8 @@ class SkeletonBuilder:
         tops = [j.name for j in joints if j.parent is None]
         for j in joints:
             if j.parent is not None and j.parent not in self.by_name:
-                self.fail(f"joint {j.name!r}: parent {j.parent!r} is not a joint; joints: {choices(self.by_name)}")
+                self.fail(f"joint {show_value(j.name)}: parent {show_value(j.parent)} is not a joint; "
+                          f"joints: {choices(self.by_name)}")
         if not tops:
             self.fail("no joint without a parent: the joints form a cycle")
         if len(tops) != 1:
@@ -223,12 +263,12 @@ class SkeletonBuilder:
             stack.extend(reversed(children[n]))
         if len(self.order) != len(joints):
             cyclic = sorted(set(children) - set(self.order))
-            self.fail(f"joints {choices(cyclic)} form a cycle (none of them leads back to {top!r})")
+            self.fail(f"joints {choices(cyclic)} form a cycle (none of them leads back to {show_value(top)})")
 
     # --- the frame and DOF tables --------------------------------------------------------
     def add_joint(self, j: JointSpec) -> None:
         """Frames (and DOFs) of one joint whose parent is already in the table."""
-        what = f"joint {j.name!r}"
+        what = f"joint {show_value(j.name)}"
         p = -1 if j.parent is None else self.joint_frame[j.parent]
         off = _vector(j.offset, f"{what} offset")
         R0 = _orientation(j.orientation, f"{what} orientation")
@@ -237,6 +277,8 @@ class SkeletonBuilder:
             self.joint_dofs[j.name] = ()
             return
         labels = [r.label or _axis_label(r.axis, k) for k, r in enumerate(j.rotations)]
+        for label in labels:
+            self.check_name(f"{j.name}.{label}", "degree of freedom name")
         if len(set(labels)) != len(labels):
             self.fail(f"{what}: rotations need distinct labels, got {labels}")
         mine = []
@@ -269,8 +311,8 @@ class SkeletonBuilder:
         """One fixed frame per site; then every joint and site name gets its frame index."""
         for s in sites:
             self.site_frame.append(_add(self.frames, _FrameRow(
-                s.name, self.joint_frame[s.parent], _vector(s.offset, f"site {s.name!r} offset"),
-                _orientation(s.orientation, f"site {s.name!r} orientation"))))
+                s.name, self.joint_frame[s.parent], _vector(s.offset, f"site {show_value(s.name)} offset"),
+                _orientation(s.orientation, f"site {show_value(s.name)} orientation"))))
             if s.sole is not None:
                 self.soles[s.name] = self.check_sole(s)
         self.index = {row.name: i for i, row in enumerate(self.frames)}
@@ -294,12 +336,12 @@ class SkeletonBuilder:
         seg_index: dict[str, int] = {}
         for seg in segments:
             if seg.name in seg_index:
-                self.fail(f"duplicate segment name {seg.name!r}")
+                self.fail(f"duplicate segment name {show_value(seg.name)}")
             if not seg.ends:
-                self.fail(f"segment {seg.name!r} needs at least one end")
+                self.fail(f"segment {show_value(seg.name)} needs at least one end")
             for end in (seg.start, *seg.ends):
                 if end not in self.index:
-                    self.fail(f"segment {seg.name!r}: {end!r} is not a joint or site; joints: "
+                    self.fail(f"segment {show_value(seg.name)}: {show_value(end)} is not a joint or site; joints: "
                               f"{choices(self.order)}; sites: {choices(self.site_names)}")
             for end in seg.ends:
                 self.bones.append((self.index[seg.start], self.index[end]))
@@ -319,7 +361,7 @@ class SkeletonBuilder:
         sites = set(self.site_names)
         for e in self.effectors:
             if e not in sites:
-                self.fail(f"effector {e!r} is not a site; sites: {choices(self.site_names)}")
+                self.fail(f"effector {show_value(e)} is not a site; sites: {choices(self.site_names)}")
         if len(set(self.effectors)) != len(self.effectors):
             self.fail(f"effectors are listed twice: {list(self.effectors)}")
 
@@ -327,7 +369,7 @@ class SkeletonBuilder:
         """The IK root: a joint or site, the top joint by default."""
         self.root = self.order[0] if root is None else root
         if self.root not in self.index:
-            self.fail(f"root {self.root!r} is not a joint or site; sites: {choices(self.site_names)}")
+            self.fail(f"root {show_value(self.root)} is not a joint or site; sites: {choices(self.site_names)}")
 
     # --- runtime structure ---------------------------------------------------------------
     def arrays(self, name: str) -> dict:

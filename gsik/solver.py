@@ -10,6 +10,7 @@ frame's ``dq`` is the next frame's starting guess (warm start).
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Mapping
 from dataclasses import replace
 from typing import NamedTuple
@@ -18,7 +19,7 @@ import numpy as np
 
 from gsik import control, kernels
 from gsik.balance import center_of_mass
-from gsik.errors import SolverError, TargetError, choices
+from gsik.errors import SolverError, TargetError, choices, show_value
 from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
 from gsik.kernels import step as step_kernels
 from gsik.kernels.kinematics import forward_kinematics
@@ -26,7 +27,7 @@ from gsik.kinematics import Topology, kinematic_model, topology
 from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix, transform
 from gsik.skeleton import Skeleton
 from gsik.settings import PAPER_METHOD, SolverSettings, setting_names
-from gsik.targets import Target
+from gsik.targets import MAX_COORDINATE, Target
 
 __all__ = ["PAPER_METHOD", "SolveResult", "Solver", "SolverSettings", "Status", "setting_names"]
 
@@ -40,6 +41,8 @@ class Status(enum.IntEnum):
     STALLED = kernels.STALLED
     #: The iteration budget ran out while the pose was still improving.
     BUDGET_EXHAUSTED = kernels.BUDGET_EXHAUSTED
+    #: The step would have made an angle or an error non-finite: it was refused, the previous pose kept.
+    REFUSED = kernels.BUDGET_EXHAUSTED + 1
 
     @property
     def label(self) -> str:
@@ -170,9 +173,16 @@ class Solver:
 
     @staticmethod
     def _check_world_from_root(world_from_root) -> np.ndarray:
-        W = np.array(world_from_root, dtype=float)
+        try:
+            W = np.array(world_from_root, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            raise SolverError(f"world_from_root must be a (4, 4) transform, got {show_value(world_from_root)}") \
+                from None
         if W.shape != (4, 4) or not np.all(np.isfinite(W)):
             raise SolverError(f"world_from_root must be a finite (4, 4) transform, got shape {W.shape}")
+        if np.max(np.abs(W[:3, 3])) > MAX_COORDINATE:
+            raise SolverError(f"world_from_root must place the root within {MAX_COORDINATE:g} m of the origin "
+                              f"in x, y and z, got {W[:3, 3].tolist()}")
         return W
 
     def _set_topology(self, root: str, q: np.ndarray, lam: float) -> None:
@@ -187,6 +197,7 @@ class Solver:
         self._state = np.zeros(sk.n_dofs + 2 * m)
         self._q = self._state[: sk.n_dofs]
         self._q[:] = q
+        self._q_before = np.empty(sk.n_dofs)  # a step's starting angles, to undo a non-finite step
         self._ws = kernels.make_workspace(sk.n_frames, sk.n_dofs, m, err=self._state[sk.n_dofs:].reshape(2, m))
         self._ws.lam[0] = lam
         self._inputs = None
@@ -350,10 +361,41 @@ class Solver:
         if targets is not None:
             self.set_targets(targets)
         if self._is_controlled:
-            return self._control_step()
+            self._q_before[:] = self._q
+            try:
+                result = self._control_step()
+                if math.isfinite(result.q @ result.q):
+                    return result
+            except np.linalg.LinAlgError:  # its least squares met non-finite numbers
+                pass
+            self._q[:] = self._q_before  # the prioritised step went non-finite: undo it as the plain one is undone
+            self._refresh_frames()
+            return self._control_result(Status.REFUSED, 1, math.inf, 0.0, 1)
         step, inputs = self._inputs or self._kernel_inputs()
+        self._q_before[:] = self._q
         step(*inputs)
+        self._refuse_non_finite(self._q_before, self._ws.stats)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
+
+    def _refuse_non_finite(self, before: np.ndarray, stats: np.ndarray) -> None:
+        """Undo a step that left a non-finite angle or error (status :attr:`Status.REFUSED`): the solver is never
+        poisoned, the pose stays the last finite one."""
+        if math.isfinite(self._state @ self._state):  # angles and errors, one buffer: finite unless one is not
+            return
+        self._q[:] = before
+        self._ws.x[:] = 0.0
+        self._ws.lam[0] = self._settings.damping
+        self._refresh_frames()
+        frames = self._topo.effector_frame
+        tp, tR, row_w = self._packed
+        err = self._ws.err  # the restored pose's errors, where a target asks for them (inf if it overflows)
+        with np.errstate(over="ignore", invalid="ignore"):
+            err[0] = np.where(row_w[:, 0] > 0, np.linalg.norm(tp - self._ws.p[frames], axis=1), 0.0)
+            cos = (np.einsum("kij,kij->k", tR, self._ws.R[frames]) - 1.0) * 0.5
+            err[1] = np.where(row_w[:, 3] > 0, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
+        stats[O_STATUS] = Status.REFUSED
+        stats[O_COST] = stats[O_RESIDUAL] = np.inf
+        stats[O_STEP_NORM] = 0.0
 
     def _kernel_inputs(self) -> tuple:
         """``(step kernel, its arguments)``: persistent arrays, so this is built once per configuration."""
@@ -452,9 +494,11 @@ class Solver:
         if self._is_controlled:
             return self._control_solve(q0, s.max_iterations if iterations is None else iterations)
         self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
+        before = self._q.copy()
         step_kernels.solve(self._model, s.kernel_settings(sweeps=s.solve_sweeps), self._packed,
                            self._topo.root_frame, self._W, self._q, s.max_iterations if iterations is None else iterations,
                            self._ws)
+        self._refuse_non_finite(before, self._ws.stats)
         return self._ws.stats.copy()
 
     def _solve_by_continuation(self, q0: np.ndarray, stages: int = 4) -> np.ndarray:

@@ -12,11 +12,16 @@ import struct
 
 import numpy as np
 
-from gsik.errors import TargetError
+from gsik.errors import TargetError, show_value
 from gsik.rotations import ROTATION_TOLERANCE, quaternion_from_rows
 
 #: How far from unit norm a target quaternion may be [-] (the rotation uses it normalised).
 QUATERNION_TOLERANCE = ROTATION_TOLERANCE * 100
+#: Largest target coordinate [m] (each of x, y, z): far beyond any character, far below where the solver's
+#: squares and products of errors and weights could overflow.
+MAX_COORDINATE = 1e6
+#: Largest target weight [-].
+MAX_WEIGHT = 1e6
 #: The identity orientation (w, x, y, z): what a target made without an orientation holds.
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
 # Fields in value order: equality, hashing and replace() all walk this one list.
@@ -156,17 +161,20 @@ def _position(value) -> np.ndarray:
     else:
         try:
             a = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            raise TargetError(f"target position must be 3 numbers, got {value!r}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise TargetError(f"target position must be 3 numbers, got {show_value(value)}") from None
         if a.shape != (3,):
             raise TargetError(f"target position must have shape (3,), got {a.shape}")
         xyz = a.tolist()
     try:
         x, y, z = float(xyz[0]), float(xyz[1]), float(xyz[2])
-    except (TypeError, ValueError):
-        raise TargetError(f"target position must be 3 numbers, got {value!r}") from None
-    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
-        raise TargetError(f"target position must be finite, got {[x, y, z]}")
+    except (TypeError, ValueError, OverflowError):
+        raise TargetError(f"target position must be 3 numbers, got {show_value(value)}") from None
+    if not (abs(x) <= MAX_COORDINATE and abs(y) <= MAX_COORDINATE and abs(z) <= MAX_COORDINATE):  # NaN fails too
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+            raise TargetError(f"target position must be finite, got {[x, y, z]}")
+        raise TargetError(f"target position must be within {MAX_COORDINATE:g} m of the origin in x, y and z, "
+                          f"got {[x, y, z]}")
     return np.frombuffer(_PACK3(x, y, z))  # a fresh read-only float64 array
 
 
@@ -179,10 +187,10 @@ def _priority(value) -> int:
 def _weight(value) -> float:
     try:
         w = float(value)
-    except (TypeError, ValueError):
-        raise TargetError(f"target weight must be a number, got {value!r}") from None
-    if not math.isfinite(w) or w < 0.0:
-        raise TargetError(f"target weight must be finite and >= 0, got {value!r}")
+    except (TypeError, ValueError, OverflowError):
+        raise TargetError(f"target weight must be a number, got {show_value(value)}") from None
+    if not 0.0 <= w <= MAX_WEIGHT:  # NaN fails too
+        raise TargetError(f"target weight must be finite and >= 0, at most {MAX_WEIGHT:g}, got {show_value(value)}")
     return w
 
 
@@ -192,8 +200,9 @@ def _orientation(value) -> tuple[tuple[float, float, float, float] | None, np.nd
         return _from_quaternion(value)
     try:
         a = value if type(value) is np.ndarray and value.dtype == np.float64 else np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise TargetError(f"target orientation must be a 3x3 rotation matrix or a quaternion, got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise TargetError(f"target orientation must be a 3x3 rotation matrix or a quaternion, "
+                          f"got {show_value(value)}") from None
     if a.shape == (4,):
         return _from_quaternion(tuple(a.tolist()))
     if a.shape == (3, 3):
@@ -204,10 +213,12 @@ def _orientation(value) -> tuple[tuple[float, float, float, float] | None, np.nd
 def _from_quaternion(q: tuple) -> tuple[tuple[float, float, float, float], np.ndarray]:
     try:
         w, x, y, z = q = (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
-    except (TypeError, ValueError):
-        raise TargetError(f"target quaternion (w, x, y, z) must be 4 numbers, got {q!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise TargetError(f"target quaternion (w, x, y, z) must be 4 numbers, got {show_value(q)}") from None
     n2 = w * w + x * x + y * y + z * z
     if not math.isfinite(n2):
+        if all(math.isfinite(v) for v in q):  # huge components: their squares overflow
+            raise TargetError(f"target quaternion (w, x, y, z) must have unit norm, got {list(q)}")
         raise TargetError(f"target orientation must be finite, got {list(q)}")
     norm = math.sqrt(n2)
     if abs(norm - 1.0) > QUATERNION_TOLERANCE:

@@ -13,9 +13,12 @@ from numbers import Integral, Real
 
 import numpy as np
 
-from gsik.errors import GsikError
+from gsik.errors import GsikError, show_value
 
 ErrorType = type[GsikError]
+
+#: Largest whole number :func:`whole` accepts by default (int64).
+MAX_WHOLE = 2**63 - 1
 
 
 def frozen(a, dtype=float) -> np.ndarray:
@@ -26,42 +29,55 @@ def frozen(a, dtype=float) -> np.ndarray:
 
 
 def number(value, what: str, error: ErrorType) -> float:
-    """``value`` as a finite float; booleans and strings are refused."""
+    """``value`` as a finite float; booleans and strings are refused, and so are integers beyond float's range."""
     if isinstance(value, bool) or not isinstance(value, Real):
-        raise error(f"{what} must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise error(f"{what} must be finite, got {value!r}")
-    return float(value)
+        raise error(f"{what} must be a number, got {show_value(value)}")
+    try:
+        v = float(value)
+    except OverflowError:
+        raise error(f"{what} must be finite, got {show_value(value)} (beyond float's range)") from None
+    if not math.isfinite(v):
+        raise error(f"{what} must be finite, got {show_value(value)}")
+    return v
 
 
 def in_range(value, lo: float, hi: float, what: str, error: ErrorType, unit: str = "") -> float:
     """``value`` as a finite float in ``[lo, hi]`` (``unit`` is named in the message)."""
     v = number(value, what, error)
     if not lo <= v <= hi:
-        raise error(f"{what} must be between {lo} and {hi}{' ' + unit if unit else ''}, got {value!r}")
+        raise error(f"{what} must be between {lo} and {hi}{' ' + unit if unit else ''}, got {show_value(value)}")
     return v
 
 
 def positive(value, what: str, error: ErrorType, unit: str = "") -> float:
     """``value`` as a finite float above zero."""
-    if isinstance(value, bool) or not isinstance(value, Real) or not (math.isfinite(value) and value > 0):
-        raise error(f"{what} must be a positive number{' of ' + unit if unit else ''}, got {value!r}")
-    return float(value)
+    try:
+        v = number(value, what, error)
+    except error:
+        v = None
+    if v is None or v <= 0:
+        raise error(f"{what} must be a positive number{' of ' + unit if unit else ''}, got {show_value(value)}")
+    return v
 
 
-def whole(value, what: str, error: ErrorType, minimum: int = 0, floats: bool = False) -> int:
-    """``value`` as an int ``>= minimum``; with ``floats``, a float of whole value (``4.0``) is accepted too."""
+def whole(value, what: str, error: ErrorType, minimum: int = 0, floats: bool = False,
+          maximum: int = MAX_WHOLE) -> int:
+    """``value`` as a Python int in ``[minimum, maximum]``; with ``floats``, a float of whole value (``4.0``) too.
+
+    The default ``maximum`` is int64's, what NumPy and the compiled kernels hold.
+    """
     ok = not isinstance(value, bool) and (isinstance(value, Integral) or
                                           (floats and isinstance(value, Real) and float(value).is_integer()))
-    if not ok or value < minimum:
-        raise error(f"{what} must be a whole number >= {minimum}, got {value!r}")
+    if not ok or not minimum <= value <= maximum:
+        top = "" if maximum == MAX_WHOLE else f" and <= {maximum}"
+        raise error(f"{what} must be a whole number >= {minimum}{top}, got {show_value(value)}")
     return int(value)
 
 
 def name(value, what: str, error: ErrorType) -> str:
     """``value`` as a non-empty (not blank) string."""
     if not isinstance(value, str) or not value.strip():
-        raise error(f"{what} must be a non-empty string, got {value!r}")
+        raise error(f"{what} must be a non-empty string, got {show_value(value)}")
     return value
 
 
@@ -71,12 +87,12 @@ def vector(value, n: int, what: str, error: ErrorType) -> tuple[float, ...]:
         return tuple(value)
     try:
         v = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise error(f"{what} must be {n} numbers, got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise error(f"{what} must be {n} finite numbers, got {show_value(value)}") from None
     if v.shape != (n,):
-        raise error(f"{what} must be {n} numbers, got {value!r}")
+        raise error(f"{what} must be {n} numbers, got {show_value(value)}")
     if not np.all(np.isfinite(v)):
-        raise error(f"{what} must be finite, got {value!r}")
+        raise error(f"{what} must be finite, got {show_value(value)}")
     return tuple(float(x) for x in v)
 
 
@@ -92,7 +108,7 @@ def finite_array(value, shape: tuple[int, ...], what: str, error: ErrorType) -> 
     if a.shape != tuple(shape):
         raise error(f"{what} must have shape {tuple(shape)}, got {a.shape}")
     if not np.all(np.isfinite(a)):
-        raise error(f"{what} {a.tolist()} is not finite")
+        raise error(f"{what} {show_value(a.tolist())} is not finite")
     return a
 
 

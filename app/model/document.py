@@ -26,7 +26,7 @@ from gsik.errors import choices
 from gsik.anim.motion import Motion
 from gsik.io.pose import Pose, PoseRead, read_pose, write_pose
 from gsik.targets import Target
-from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
+from gsik.rotations import matrix_from_axis_angle
 from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
 from gsik_studio.model.library import PoseLibrary

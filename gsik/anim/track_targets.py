@@ -91,20 +91,26 @@ class TargetPlan(NamedTuple):
 
 
 class ClipTargets(NamedTuple):
-    """What the clip asks for, per frame: root pose (F, 4, 4), targets, their positions (F, m, 3) [m] and
-    orientations (F, m, 3, 3)."""
+    """What the clip asks for, per frame: root pose (F, 4, 4), the positions (F, m, 3) [m] and orientations
+    (F, m, 3, 3) of the planned targets; :meth:`at` makes one frame's targets when that frame is solved (made all up
+    front, 100k frames of targets took ~800 MB)."""
 
     world_from_root: np.ndarray
-    targets: list[dict[str, Target]]
     positions: np.ndarray
     rotations: np.ndarray
+    plan: TargetPlan
+
+    def at(self, f: int) -> dict[str, Target]:
+        """The targets of frame ``f``."""
+        p, R = self.positions[f], self.rotations[f]
+        return {n: Target(p[k], None if only else R[k], priority=level)
+                for k, (n, _, only, level) in enumerate(zip(*self.plan))}
 
 
 def clip_targets(motion: Motion, root_in_clip: int, plan: TargetPlan) -> ClipTargets:
-    """Targets and root poses from the clip's own forward kinematics."""
+    """Root poses and target positions and orientations from the clip's own forward kinematics."""
     F = motion.n_frames
     W = np.empty((F, 4, 4))
-    targets: list[dict[str, Target]] = []
     target_p = np.empty((F, len(plan.names), 3))
     target_R = np.empty((F, len(plan.names), 3, 3))
     for f in range(F):
@@ -112,9 +118,7 @@ def clip_targets(motion: Motion, root_in_clip: int, plan: TargetPlan) -> ClipTar
         W[f] = transform(R[root_in_clip], p[root_in_clip])
         target_p[f] = p[plan.clip_frames]
         target_R[f] = R[plan.clip_frames]
-        targets.append({n: Target(p[c], None if only else R[c], priority=level)
-                        for n, c, only, level in zip(*plan)})
-    return ClipTargets(W, targets, target_p, target_R)
+    return ClipTargets(W, target_p, target_R, plan)
 
 
 def clip_posture(skeleton: Skeleton, motion: Motion) -> np.ndarray:

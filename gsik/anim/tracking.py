@@ -241,7 +241,7 @@ def _follow(solver: Solver, clip: ClipTargets, steps_per_frame: int, reference: 
 
     Returns ``(Q (F, n_dofs) [rad], seconds (F,), steps (F,), statuses)``.
     """
-    F = len(clip.targets)
+    F = len(clip.world_from_root)
     Q = np.empty((F, solver.skeleton.n_dofs))
     seconds = np.empty(F)
     steps = np.zeros(F, dtype=np.int64)
@@ -251,7 +251,7 @@ def _follow(solver: Solver, clip: ClipTargets, steps_per_frame: int, reference: 
         if f == 0:
             if reference is not None:
                 solver.set_posture(reference[0], posture_weight)
-            result = solver.solve(clip.targets[0])
+            result = solver.solve(clip.at(0))
             Q[f], status, steps[f] = result.q, result.status, result.iterations
         else:
             Q[f], status, steps[f] = _frame(solver, clip, f, reference, posture_weight, steps_per_frame)
@@ -274,10 +274,10 @@ def _frame(solver: Solver, clip: ClipTargets, f: int, reference: np.ndarray | No
     solver.set_world_from_root(clip.world_from_root[f])
     if reference is not None:
         solver.set_q(reference[f])
-        if _meets(solver, clip.targets[f]):
+        if _meets(solver, clip.at(f)):
             return solver.q, Status.CONVERGED, 0
         solver.set_posture(reference[f], posture_weight)
-    solver.set_targets(clip.targets[f])
+    solver.set_targets(clip.at(f))
     for k in range(steps_per_frame):
         result = solver.step()
         if result.converged:

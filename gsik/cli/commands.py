@@ -10,12 +10,10 @@ import time
 from typing import TextIO
 
 import gsik
-from gsik.cli.common import (PROG, CommandError, check_out, deg, load_any_skeleton, make_dir, mm, settings_overrides,
-                             split_names)
+from gsik.cli.common import PROG, CommandError, check_out, deg, load_any_skeleton, make_dir, mm, settings_overrides
 from gsik.cli.progress import progress_for
 from gsik.io.bvh_skeleton import write_motion_bvh
-from gsik.io.files import read_text
-from gsik.io.pose import read_pose, write_pose
+from gsik.io.pose import pose_from_document, read_pose_document, write_pose
 
 
 def _warn(message: str) -> None:
@@ -25,26 +23,15 @@ def _warn(message: str) -> None:
 # -- solve ------------------------------------------------------------------------------------------
 
 
-def _pose_skeleton_name(path: str) -> str | None:
-    """The ``skeleton:`` field of a pose file, read loosely (the pose reader checks everything later)."""
-    import yaml
-
-    try:
-        data = yaml.safe_load(read_text(path, "pose file"))
-    except yaml.YAMLError:
-        return None
-    name = data.get("skeleton") if isinstance(data, dict) else None
-    return name if isinstance(name, str) else None
-
-
 def cmd_solve(args: argparse.Namespace, out: TextIO) -> int:
     if args.out:
         check_out(args.out, (".yaml", ".yml"), "pose")
-    spec = args.skeleton or _pose_skeleton_name(args.pose)
+    doc = read_pose_document(args.pose)  # read and parsed once; its skeleton: path is relative to the pose file
+    spec = args.skeleton or doc.skeleton
     if spec is None:
         raise CommandError(f"{args.pose}: cannot tell its skeleton (no 'skeleton:' field); give --skeleton")
     sk = load_any_skeleton(spec)
-    read = read_pose(args.pose, sk)
+    read = pose_from_document(doc, sk)
     for w in read.warnings:
         _warn(w)
     pose = read.pose

@@ -13,7 +13,7 @@ from gsik.cli.commands import cmd_bench, cmd_scenarios, cmd_solve, cmd_walk
 from gsik.cli.track import cmd_track
 from gsik.cli.common import PROG
 from gsik.cli.info import cmd_info
-from gsik.errors import GsikError
+from gsik.errors import GsikError, show_value
 
 
 def _positive_int(text: str) -> int:
@@ -179,6 +179,12 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _fail(message: str) -> int:
+    """Report an input problem as one line on stderr; exit code 2."""
+    print(f"{PROG}: error: {' '.join(message.split(chr(10)))}", file=sys.stderr)
+    return 2
+
+
 def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
     """Run the command line; returns the exit code (``gsik`` and ``python -m gsik`` exit with it)."""
     out = sys.stdout if out is None else out
@@ -190,12 +196,12 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
     try:
         return args.run(args, out)
     except GsikError as exc:  # CommandError included
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(str(exc))
     except OSError as exc:
-        where = f" {exc.filename!r}" if exc.filename else ""
-        print(f"{PROG}: error: cannot access{where}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
+        where = f" {show_value(exc.filename)}" if exc.filename else ""
+        return _fail(f"cannot access{where}: {exc.strerror or exc}")
+    except MemoryError:
+        return _fail("not enough memory for this input")
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130

@@ -163,7 +163,7 @@ def _write_body_table(out: TextIO, result) -> None:
         out.write(f"worst untracked joint: {worst.name}, {mm(worst.max_error)} at frame {worst.worst_frame} "
                   f"(p95 {100 * worst.percentile_error / h:.2f}% of the body height {h:.3f} m)\n")
     w = max(len(r.name) for r in rows)
-    out.write(f"every joint and site against the clip (all frames, * tracked):\n")
+    out.write("every joint and site against the clip (all frames, * tracked):\n")
     out.write(f"  {'':1} {'name':<{w}}  {'p95':>12} {'p95 %':>7}  {'max':>12}  {'at frame':>8}\n")
     for r in rows:
         out.write(f"  {'*' if r.tracked else ' '} {r.name:<{w}}  {mm(r.percentile_error):>12} "

@@ -20,7 +20,7 @@ from functools import cached_property
 
 import numpy as np
 
-from gsik.errors import UrdfError, choices
+from gsik.errors import UrdfError, choices, show_value
 from gsik.io.files import read_bytes
 from gsik.validate import finite_array
 
@@ -72,11 +72,13 @@ class UrdfJoint:
         object.__setattr__(self, "origin_xyz", _frozen_vector(self.origin_xyz, f"joint {self.name!r} origin_xyz"))
         object.__setattr__(self, "origin_rpy", _frozen_vector(self.origin_rpy, f"joint {self.name!r} origin_rpy"))
         axis = _frozen_vector(self.axis, f"joint {self.name!r} axis")
-        norm = float(np.linalg.norm(axis))
-        if norm == 0.0:
+        scale = float(np.max(np.abs(axis)))
+        if scale == 0.0:
             raise UrdfError(f"joint {self.name!r}: axis is zero")
-        if abs(norm - 1.0) > 1e-12:
-            axis = _frozen_vector(axis / norm, f"joint {self.name!r} axis")
+        scaled = axis / scale  # components near 1e308 would overflow the norm
+        scaled_norm = float(np.linalg.norm(scaled))
+        if abs(scaled_norm * scale - 1.0) > 1e-12:
+            axis = _frozen_vector(scaled / scaled_norm, f"joint {self.name!r} axis")
         object.__setattr__(self, "axis", axis)
         for attr in ("lower", "upper"):
             value = getattr(self, attr)
@@ -240,8 +242,8 @@ def _children(elem: ET.Element, tag: str) -> list[ET.Element]:
 
 
 def _number(token: str, where: str) -> float:
-    if _NUMBER_RE.fullmatch(token):
-        return float(token)
+    if _NUMBER_RE.fullmatch(token) and np.isfinite(value := float(token)):
+        return value
     try:
         value = float(token)
     except ValueError:
@@ -443,6 +445,10 @@ def _xml_root(data: str | bytes, source: str) -> ET.Element:
     except ET.ParseError as exc:
         line = exc.position[0] if getattr(exc, "position", None) else None
         raise UrdfError(f"{source}:{line}: malformed XML: {exc}") from None
+    except LookupError as exc:  # an encoding declaration Python does not know
+        raise UrdfError(f"{source}: cannot decode the XML: {show_value(str(exc))}") from None
+    except UnicodeError as exc:  # text holding lone surrogates cannot be encoded for the parser
+        raise UrdfError(f"{source}: cannot encode the XML text: {exc.reason} at character {exc.start}") from None
 
 
 def _robot_from_xml(root: ET.Element, source: str) -> UrdfRobot:

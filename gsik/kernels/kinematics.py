@@ -174,7 +174,7 @@ def effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err, M):
             for b in range(3):
                 M[a, b] = target_R[k, a, 0] * R[f, b, 0] + target_R[k, a, 1] * R[f, b, 1] + target_R[k, a, 2] * R[f, b, 2]
         log_map_into(M, e, 6 * k + 3)
-        err[0, k] = math.sqrt(e[6 * k] ** 2 + e[6 * k + 1] ** 2 + e[6 * k + 2] ** 2)
+        err[0, k] = math.hypot(math.hypot(e[6 * k], e[6 * k + 1]), e[6 * k + 2])  # no overflow above 1e154
         err[1, k] = math.sqrt(e[6 * k + 3] ** 2 + e[6 * k + 4] ** 2 + e[6 * k + 5] ** 2)
         for r in range(6):
             cost += 0.5 * row_w[k, r] * e[6 * k + r] ** 2

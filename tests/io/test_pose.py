@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gsik
+from gsik.targets import MAX_COORDINATE, MAX_WEIGHT
 from gsik import Target
 from gsik.io.pose import Pose, PoseRead, pose_from_yaml, pose_to_yaml, read_pose, write_pose
 from gsik.rotations import quaternion_from_matrix
@@ -72,9 +73,9 @@ def test_round_trip_through_file_is_exact(skeleton, pose, tmp_path):
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.floats(allow_nan=False, allow_infinity=False, width=64), min_size=3, max_size=3),
-       st.floats(min_value=0.0, max_value=1e6, allow_nan=False))
-def test_any_finite_numbers_round_trip_bit_for_bit(skeleton, position, weight):
+@given(st.lists(st.floats(min_value=-MAX_COORDINATE, max_value=MAX_COORDINATE, width=64), min_size=3, max_size=3),
+       st.floats(min_value=0.0, max_value=MAX_WEIGHT, allow_nan=False))
+def test_any_allowed_numbers_round_trip_bit_for_bit(skeleton, position, weight):
     pose = _pose(skeleton)
     t = pose.targets["head"].replace(position=position, weight=weight)
     pose = pose.replace(targets={**pose.targets, "head": t}, root_position=position)

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import os
 import re
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
 
-from gsik.errors import BvhError, choices
+from gsik.errors import BvhError, choices, show_value
 from gsik.io.bvh.clip import CHANNEL_LOOKUP, CHANNEL_NAMES, BvhClip, BvhJoint
 from gsik.io.files import read_text
 from gsik.io.names import unique_name
@@ -73,9 +74,11 @@ class _Tokens:
 
 
 def _number(token: str, line: int, where: str, source: str) -> float:
-    """A strict decimal number; nan/inf and anything else raise BvhError."""
+    """A strict, finite decimal number; nan/inf, ``1e400`` and anything else raise BvhError."""
     if _NUMBER_RE.fullmatch(token):
-        return float(token)
+        value = float(token)
+        if np.isfinite(value):
+            return value
     raise _bad_number(token, line, where, source)
 
 
@@ -83,10 +86,10 @@ def _bad_number(token: str, line: int, where: str, source: str) -> BvhError:
     """The error for a token that is not a strict finite number."""
     try:
         finite = bool(np.isfinite(float(token)))
-    except ValueError:
+    except (ValueError, OverflowError):
         finite = True  # not a number at all
     kind = "non-numeric" if finite else "non-finite"
-    return BvhError(f"{kind} value {token!r} in {where}", line=line, path=source)
+    return BvhError(f"{kind} value {show_value(token)} in {where}", line=line, path=source)
 
 
 def _split_lines(text: str) -> list[str]:
@@ -346,28 +349,35 @@ def _motion_values(
 ) -> np.ndarray:
     """The MOTION number stream as an (n_frames, n_channels) array.
 
-    Fast path: split everything and let NumPy convert. Only when that fails
-    (or when a token might be non-strict) walk the lines to report where.
+    Fast path: NumPy's C reader over the lines, one frame a line, its memory the array's own (a million frames
+    no longer become tens of millions of Python strings). Only when that fails (a token that is not a plain
+    decimal number, frames laid over several lines) are the tokens walked, to read them as one stream or say where
+    the bad one is.
     """
-    chunk = "\n".join(lines[start:])
-    tokens = chunk.split()
-    values = _fast_numbers(chunk, tokens)
+    values = _bulk_numbers(lines[start:])
     if values is None:
         _find_bad_number(lines, start, n_frames, labels, source)
-        values = np.array([float(t) for t in tokens], dtype=float)
-    _check_count(lines, start, len(tokens), n_frames, len(labels), source)
+        values = np.array([float(tok) for tok, _ in _line_tokens(lines, start)], dtype=float)
+    _check_count(lines, start, values.size, n_frames, len(labels), source)
     return values.reshape(n_frames, len(labels))
 
 
-def _fast_numbers(chunk: str, tokens: list[str]) -> np.ndarray | None:
-    """The tokens as finite floats by NumPy, or ``None`` when any needs the strict check."""
-    # NumPy also accepts "1_000", non-ASCII digits, nan and inf: check those slowly.
-    if not chunk.isascii() or "_" in chunk:
+# Characters of plain decimal numbers and the space between them: anything else needs the strict, slow check
+# (NumPy's reader would also take "nan", "inf", "1_000" and non-ASCII digits).
+_NOT_DECIMAL = re.compile(r"[^0-9eE+\-. \t\r\n]")
+
+
+def _bulk_numbers(data_lines: list[str]) -> np.ndarray | None:
+    """The values of ``data_lines`` in file order as finite floats, or ``None`` when they need the token walk."""
+    if any(_NOT_DECIMAL.search(line) for line in data_lines):
         return None
-    try:
-        values = np.array(tokens, dtype=float)
-    except ValueError:
-        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "input contained no data": zero frames or channels, counted later
+        try:
+            values = np.loadtxt(data_lines, dtype=float, comments=None, ndmin=2)
+        except ValueError:  # a malformed number, or frames over several lines
+            return None
+    values = values.ravel()
     return values if np.all(np.isfinite(values)) else None
 
 
@@ -375,7 +385,7 @@ def _find_bad_number(lines: list[str], start: int, n_frames: int, labels: tuple[
     """Raise for the first token that is not a strict decimal number, naming its frame and channel."""
     n_channels = len(labels)
     for k, (tok, line) in enumerate(_line_tokens(lines, start)):
-        if not _NUMBER_RE.fullmatch(tok):
+        if not _NUMBER_RE.fullmatch(tok) or not np.isfinite(float(tok)):
             where = "MOTION data"
             if k < n_frames * n_channels and n_channels:
                 where += f" (frame {k // n_channels + 1}, channel {labels[k % n_channels]!r})"
@@ -406,6 +416,17 @@ def _line_of_token(lines: list[str], start: int, k: int) -> int:
     return len(lines)
 
 
+_LONE_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def _check_text(lines: list[str], source: str) -> None:
+    """Refuse a lone surrogate (text decoded with ``surrogateescape``, or built in memory): no name could hold it."""
+    for i, line in enumerate(lines):
+        if _LONE_SURROGATE.search(line):
+            raise BvhError("not text: a lone surrogate character (the file is not valid UTF-8 or Latin-1 text)",
+                           line=i + 1, path=source)
+
+
 def parse_bvh(text: str, source: str = "<string>") -> BvhClip:
     """Parse BVH text.
 
@@ -426,6 +447,7 @@ def parse_bvh(text: str, source: str = "<string>") -> BvhClip:
     lines = _split_lines(text)
     if not any(line.strip() for line in lines):
         raise BvhError("empty file", line=1, path=source)
+    _check_text(lines, source)
     motion_at = _find_motion_line(lines)
     hierarchy_lines = lines if motion_at is None else lines[:motion_at]
     eof_line = len(lines) if motion_at is None else motion_at + 1
