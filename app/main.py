@@ -18,6 +18,63 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _application():
+    """The QApplication, themed (the Qt platform is X11 on Linux unless QT_QPA_PLATFORM says otherwise)."""
+    os.environ.setdefault("QT_QPA_PLATFORM", "xcb" if sys.platform.startswith("linux") else "")
+    if not os.environ["QT_QPA_PLATFORM"]:
+        del os.environ["QT_QPA_PLATFORM"]
+    from gsik_studio.qt_compat import protect_none
+
+    protect_none()  # PySide6 6.12 on Python 3.11 drops references to None (see gsik_studio.qt_compat)
+    import pyvista as pv
+    from PySide6 import QtWidgets
+
+    from gsik_studio.widgets.theme import apply_dark_theme
+
+    pv.global_theme.multi_samples = 0
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([sys.argv[0]])
+    app.setApplicationName("gsik-studio")
+    app.setOrganizationName("gsik")
+    apply_dark_theme(app)
+    return app
+
+
+def _screenshot(app, args, size: tuple[int, int]) -> int:
+    """A one-shot picture: no remembered geometry, no dialogs."""
+    from PySide6 import QtCore
+
+    import gsik
+    from gsik_studio.model import Document
+    from gsik_studio.window import MainWindow
+
+    doc = Document()
+    if args.pose:
+        try:
+            warnings = doc.open(args.pose)
+        except gsik.GsikError as exc:
+            print(f"gsik-studio: {exc}", file=sys.stderr)
+            return 1
+        for w in warnings:
+            print(f"gsik-studio: warning: {w}", file=sys.stderr)
+    with tempfile.TemporaryDirectory(prefix="gsik-studio-") as scratch:
+        settings = QtCore.QSettings(os.path.join(scratch, "settings.ini"), QtCore.QSettings.IniFormat)
+        window = MainWindow(doc, settings=settings)
+        window.resize(*size)
+        window.show()
+        app.processEvents()
+        window.settle()
+        window.set_view(args.view)
+        app.processEvents()
+        ok = window.save_screenshot(args.screenshot)
+        doc.history.set_clean()
+        window.close()
+    if not ok:
+        print(f"gsik-studio: could not write {args.screenshot}", file=sys.stderr)
+        return 1
+    print(args.screenshot)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run gsik-studio; returns the exit code."""
     args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
@@ -26,56 +83,13 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError:
         print(f"gsik-studio: --size must look like 1440x900, got {args.size!r}", file=sys.stderr)
         return 2
-
-    os.environ.setdefault("QT_QPA_PLATFORM", "xcb" if sys.platform.startswith("linux") else "")
-    if not os.environ["QT_QPA_PLATFORM"]:
-        del os.environ["QT_QPA_PLATFORM"]
-    from gsik_studio.qt_compat import protect_none
-
-    protect_none()  # PySide6 6.12 on Python 3.11 drops references to None (see gsik_studio.qt_compat)
-    import pyvista as pv
-    from PySide6 import QtCore, QtWidgets
-
-    import gsik
-    from gsik_studio.main_window import MainWindow, apply_dark_theme
-    from gsik_studio.model import Document
-
-    pv.global_theme.multi_samples = 0
-    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([sys.argv[0]])
-    app.setApplicationName("gsik-studio")
-    app.setOrganizationName("gsik")
-    apply_dark_theme(app)
-
+    app = _application()
     if args.screenshot:
-        # A one-shot picture: no remembered geometry, no dialogs.
-        doc = Document()
-        if args.pose:
-            try:
-                warnings = doc.open(args.pose)
-            except gsik.GsikError as exc:
-                print(f"gsik-studio: {exc}", file=sys.stderr)
-                return 1
-            for w in warnings:
-                print(f"gsik-studio: warning: {w}", file=sys.stderr)
-        scratch = tempfile.TemporaryDirectory(prefix="gsik-studio-")
-        settings = QtCore.QSettings(os.path.join(scratch.name, "settings.ini"), QtCore.QSettings.IniFormat)
-        window = MainWindow(doc, settings=settings)
-        window.resize(width, height)
-        window.show()
-        app.processEvents()
-        window.settle()
-        window.set_view(args.view)
-        window._update_readouts(force=True)
-        app.processEvents()
-        ok = window.save_screenshot(args.screenshot)
-        window.doc.history.set_clean()
-        window.close()
-        scratch.cleanup()
-        if not ok:
-            print(f"gsik-studio: could not write {args.screenshot}", file=sys.stderr)
-            return 1
-        print(args.screenshot)
-        return 0
+        return _screenshot(app, args, (width, height))
+
+    from PySide6 import QtCore
+
+    from gsik_studio.window import MainWindow
 
     window = MainWindow()
     if window.settings.value("window/geometry") is None:

@@ -27,10 +27,10 @@ from collections.abc import Callable
 import numpy as np
 import pyvista as pv
 import vtk
-from vtkmodules.util.numpy_support import vtk_to_numpy
 
+from gsik.rotations import quaternion_from_matrix, transform
 from gsik_studio.model import Document, Signal
-from gsik.rotations import quaternion_from_matrix
+from gsik_studio.scene import glyph_actor, line_cells, points_view, rgb8, set_colors, touch
 
 # Colours (RGB 0-1). Red / green / blue are reserved for targets, effectors and axes.
 AXIS_COLORS = np.array([[0.93, 0.18, 0.16], [0.20, 0.80, 0.22], [0.20, 0.45, 1.00]])
@@ -67,16 +67,6 @@ VIEWS = {
 }
 
 
-def _rgb8(colors) -> np.ndarray:
-    return np.clip(np.round(np.asarray(colors, dtype=float) * 255), 0, 255).astype(np.uint8)
-
-
-def _lines(pairs) -> np.ndarray:
-    """VTK cell array for 2-point lines."""
-    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    return np.hstack([np.full((len(pairs), 1), 2, dtype=np.int64), pairs]).ravel()
-
-
 def _ring_and_stick(axis: np.ndarray) -> np.ndarray:
     """(RING_POINTS + 2, 3) points of a ring around ``axis`` and a stick along it, in the DOF's frame."""
     a = axis / np.linalg.norm(axis)
@@ -88,41 +78,6 @@ def _ring_and_stick(axis: np.ndarray) -> np.ndarray:
     return np.vstack([ring, np.zeros(3), STICK_LENGTH * a])
 
 
-def _points_view(pd: pv.PolyData) -> np.ndarray:
-    """A writable NumPy view of a PolyData's point coordinates (write, then :func:`_touch`)."""
-    return vtk_to_numpy(pd.GetPoints().GetData())
-
-
-def _touch(pd: pv.PolyData) -> None:
-    pd.GetPoints().Modified()
-
-
-def _glyph_actor(points: pv.PolyData, radius: float, colors: np.ndarray | None, color=None):
-    """A vtkGlyph3DMapper actor drawing one sphere per point (per-point RGB colours if given)."""
-    sphere = pv.Sphere(radius=radius, theta_resolution=14, phi_resolution=10)
-    mapper = vtk.vtkGlyph3DMapper()
-    mapper.SetInputData(points)
-    mapper.SetSourceData(sphere)
-    mapper.ScalingOff()
-    mapper.OrientOff()
-    if colors is not None:
-        points.point_data.set_array(colors, "colors")
-        mapper.SetScalarModeToUsePointFieldData()
-        mapper.SelectColorArray("colors")
-        mapper.SetColorModeToDirectScalars()
-        mapper.ScalarVisibilityOn()
-    else:
-        mapper.ScalarVisibilityOff()
-    actor = vtk.vtkActor()
-    actor.SetMapper(mapper)
-    prop = actor.GetProperty()
-    if color is not None:
-        prop.SetColor(color)
-    prop.SetSpecular(0.3)
-    prop.SetSpecularPower(20)
-    return actor
-
-
 class Viewport:
     """Draws a document in a pyvista plotter (a ``pyvistaqt.QtInteractor`` in the app).
 
@@ -132,14 +87,13 @@ class Viewport:
 
     Attributes:
         selection_changed: Signal(name or None) when a target is selected.
-        drag_started / drag_finished: Signal(name) around a gizmo drag.
+        drag_finished: Signal(name) when a target gizmo drag ends.
     """
 
     def __init__(self, plotter: pv.Plotter, doc: Document):
         self.plotter = plotter
         self.doc = doc
         self.selection_changed = Signal()
-        self.drag_started = Signal()
         self.drag_finished = Signal()
         self.selected: str | None = None
         self._drag_counter = itertools.count(1)
@@ -169,7 +123,7 @@ class Viewport:
         for t in ticks:
             pts += [(t, -2.0, 0.0), (t, 2.0, 0.0), (-2.0, t, 0.0), (2.0, t, 0.0)]
         pairs = np.arange(len(pts)).reshape(-1, 2)
-        grid = pv.PolyData(np.array(pts), lines=_lines(pairs))
+        grid = pv.PolyData(np.array(pts), lines=line_cells(pairs))
         self.actors["grid"] = pl.add_mesh(grid, color=GRID_COLOR, line_width=1, lighting=False, pickable=False,
                                           reset_camera=False)
         floor = pv.Plane(center=(0, 0, -0.002), direction=(0, 0, 1), i_size=4.0, j_size=4.0)
@@ -178,15 +132,15 @@ class Viewport:
 
         # Bones: all frames as points, bones as lines between them.
         n_frames = sk.n_frames
-        self._bones = pv.PolyData(np.zeros((n_frames, 3)), lines=_lines(sk.bone_frames))
+        self._bones = pv.PolyData(np.zeros((n_frames, 3)), lines=line_cells(sk.bone_frames))
         self.actors["bones"] = pl.add_mesh(self._bones, color=BONE_COLOR, line_width=7, render_lines_as_tubes=True,
                                            pickable=False, reset_camera=False)
 
         # Joints: a glyph sphere per primary joint, coloured per point.
         self._joint_frames = np.asarray(sk.joint_frame)
         self._joints = pv.PolyData(np.zeros((len(self._joint_frames), 3)))
-        self._joint_colors = np.tile(_rgb8(JOINT_COLOR), (len(self._joint_frames), 1))
-        self.actors["joints"] = _glyph_actor(self._joints, JOINT_RADIUS, self._joint_colors)
+        self._joint_colors = np.tile(rgb8(JOINT_COLOR), (len(self._joint_frames), 1))
+        self.actors["joints"] = glyph_actor(self._joints, JOINT_RADIUS, self._joint_colors)
         pl.add_actor(self.actors["joints"], reset_camera=False, pickable=False)
         # Which joint each DOF belongs to.
         self._dof_joint = np.zeros(sk.n_dofs, dtype=np.int64)
@@ -206,7 +160,7 @@ class Viewport:
             cells += [2, base + RING_POINTS, base + RING_POINTS + 1]
         self._gizmos = pv.PolyData(np.zeros((sk.n_dofs * K, 3)), lines=np.array(cells, dtype=np.int64))
         axis_index = np.argmax(np.abs(np.asarray(sk.frame_axis)[self._dof_frames]), axis=1)
-        self._dof_base_colors = _rgb8(AXIS_COLORS[axis_index])
+        self._dof_base_colors = rgb8(AXIS_COLORS[axis_index])
         self._gizmo_colors = np.repeat(self._dof_base_colors, K, axis=0)
         self._gizmos.point_data.set_array(self._gizmo_colors, "colors")
         self.actors["gizmos"] = pl.add_mesh(self._gizmos, scalars="colors", rgb=True, line_width=2, lighting=False,
@@ -215,16 +169,16 @@ class Viewport:
         # Achieved effectors: green glyph spheres; triads for effectors and targets.
         m = len(self._sites)
         self._effectors = pv.PolyData(np.zeros((m, 3)))
-        self.actors["effectors"] = _glyph_actor(self._effectors, EFFECTOR_RADIUS, None, EFFECTOR_COLOR)
+        self.actors["effectors"] = glyph_actor(self._effectors, EFFECTOR_RADIUS, None, EFFECTOR_COLOR)
         pl.add_actor(self.actors["effectors"], reset_camera=False, pickable=False)
         # 2 triads (achieved, target) x 3 axes x 2 points per site.
-        self._triads = pv.PolyData(np.zeros((m * 12, 3)), lines=_lines(np.arange(m * 12).reshape(-1, 2)))
-        self._triads.point_data.set_array(np.tile(np.repeat(_rgb8(AXIS_COLORS), 2, axis=0), (2 * m, 1)), "colors")
+        self._triads = pv.PolyData(np.zeros((m * 12, 3)), lines=line_cells(np.arange(m * 12).reshape(-1, 2)))
+        self._triads.point_data.set_array(np.tile(np.repeat(rgb8(AXIS_COLORS), 2, axis=0), (2 * m, 1)), "colors")
         self.actors["triads"] = pl.add_mesh(self._triads, scalars="colors", rgb=True, line_width=3, lighting=False,
                                             pickable=False, reset_camera=False)
 
         # Thin lines target <-> achieved.
-        self._errors = pv.PolyData(np.zeros((m * 2, 3)), lines=_lines(np.arange(m * 2).reshape(-1, 2)))
+        self._errors = pv.PolyData(np.zeros((m * 2, 3)), lines=line_cells(np.arange(m * 2).reshape(-1, 2)))
         self.actors["errors"] = pl.add_mesh(self._errors, color=ERROR_LINE_COLOR, line_width=1.5, lighting=False,
                                             pickable=False, reset_camera=False)
 
@@ -234,7 +188,7 @@ class Viewport:
 
         self._dynamic = (self._bones, self._joints, self._gizmos, self._effectors, self._triads, self._errors)
         self._bones_xyz, self._joints_xyz, self._gizmos_xyz, self._effectors_xyz, self._triads_xyz, \
-            self._errors_xyz = (_points_view(pd) for pd in self._dynamic)
+            self._errors_xyz = (points_view(pd) for pd in self._dynamic)
 
         # Target gizmos: one sphere widget per effector site.
         self.target_widgets = []
@@ -307,7 +261,6 @@ class Viewport:
         self._drag = next(self._drag_counter)
         self._drag_kind = "move"
         self.select(name)
-        self.drag_started.emit(name)
 
     def _on_drag_move(self, name: str, widget) -> None:
         if self._syncing or name not in self.doc.targets:
@@ -358,9 +311,8 @@ class Viewport:
     def refresh(self) -> None:
         """Redraw the skeleton, effectors, triads and error lines from the document (no render)."""
         doc = self.doc
-        solver = doc.solver
-        P = solver.world_positions()
-        R = solver.world_rotations()
+        P = doc.world_positions()
+        R = doc.world_rotations()
         self._bones_xyz[:] = P
         self._joints_xyz[:] = P[self._joint_frames]
 
@@ -375,10 +327,10 @@ class Viewport:
             self._limit_state = at_limit
             joint_hit = np.zeros(len(self._joint_frames), dtype=bool)
             joint_hit[self._dof_joint[at_limit]] = True
-            self._set_colors(self._joints, np.where(joint_hit[:, None], _rgb8(LIMIT_COLOR), _rgb8(JOINT_COLOR)))
+            set_colors(self._joints, np.where(joint_hit[:, None], rgb8(LIMIT_COLOR), rgb8(JOINT_COLOR)))
             K = self._gizmo_local.shape[1]
-            dof_colors = np.where(at_limit[:, None], _rgb8(LIMIT_COLOR), self._dof_base_colors)
-            self._set_colors(self._gizmos, np.repeat(dof_colors, K, axis=0))
+            dof_colors = np.where(at_limit[:, None], rgb8(LIMIT_COLOR), self._dof_base_colors)
+            set_colors(self._gizmos, np.repeat(dof_colors, K, axis=0))
 
         # Effectors (achieved) and targets.
         Pe = P[self._site_frames]
@@ -404,7 +356,7 @@ class Viewport:
         self._triads_xyz[:] = tri.reshape(-1, 3)
         self._errors_xyz[:] = err.reshape(-1, 3)
         for pd in self._dynamic:
-            _touch(pd)
+            touch(pd)
 
         # Root marker.
         f = doc.skeleton.frame_of(doc.root)
@@ -413,49 +365,47 @@ class Viewport:
         M[:3, 3] = P[f]
         self.actors["root"].user_matrix = M
 
-    @staticmethod
-    def _set_colors(pd: pv.PolyData, colors: np.ndarray) -> None:
-        arr = pd.GetPointData().GetArray("colors")
-        vtk_to_numpy(arr)[:] = colors
-        arr.Modified()
-
     def sync_targets(self) -> None:
         """Move the target widgets to the document's targets (no callbacks fire)."""
         targets = self.doc.targets
         self._syncing = True
         try:
             for name, w in zip(self._sites, self.target_widgets):
-                t = targets.get(name)
-                if t is None or not t.enabled:
-                    if w.GetEnabled():
-                        w.Off()
-                    continue
-                if not w.GetEnabled():
-                    w.On()
-                if not (self._drag_kind == "move" and name == self.selected):  # the dragged one moves itself
-                    w.SetCenter(*t.position)
-                w.GetSphereProperty().SetColor(TARGET_SELECTED_COLOR if name == self.selected else TARGET_COLOR)
+                self._sync_sphere(name, w, targets.get(name))
             t = targets.get(self.selected) if self.selected else None
-            if t is not None and t.enabled:
-                if self._drag_kind != "rotate":  # the box being turned turns itself
-                    tr = vtk.vtkTransform()
-                    M = np.eye(4)
-                    M[:3, :3] = t.rotation
-                    M[:3, 3] = t.position
-                    tr.SetMatrix(M.ravel())
-                    self.box_widget.SetTransform(tr)
-                if not self.box_widget.GetEnabled():
-                    self.box_widget.On()
-                self._label.SetInput(self.selected)
-                self._label.SetPosition(*t.position)
-                self._label.VisibilityOn()
-            else:
-                if self.box_widget.GetEnabled():
-                    self.box_widget.Off()
-                self._label.VisibilityOff()
+            self._sync_box(t if t is not None and t.enabled else None)
         finally:
             self._syncing = False
         self._corner.SetInput(f"IK root: {self.doc.root.replace('_', ' ')}")
+
+    def _sync_sphere(self, name: str, w, t) -> None:
+        """One target's sphere widget: hidden without an enabled target, else at the target."""
+        if t is None or not t.enabled:
+            if w.GetEnabled():
+                w.Off()
+            return
+        if not w.GetEnabled():
+            w.On()
+        if not (self._drag_kind == "move" and name == self.selected):  # the dragged one moves itself
+            w.SetCenter(*t.position)
+        w.GetSphereProperty().SetColor(TARGET_SELECTED_COLOR if name == self.selected else TARGET_COLOR)
+
+    def _sync_box(self, t) -> None:
+        """The rotate box and label on the selected enabled target ``t``; hidden when None."""
+        if t is None:
+            if self.box_widget.GetEnabled():
+                self.box_widget.Off()
+            self._label.VisibilityOff()
+            return
+        if self._drag_kind != "rotate":  # the box being turned turns itself
+            tr = vtk.vtkTransform()
+            tr.SetMatrix(transform(t.rotation, np.array(t.position)).ravel())
+            self.box_widget.SetTransform(tr)
+        if not self.box_widget.GetEnabled():
+            self.box_widget.On()
+        self._label.SetInput(self.selected)
+        self._label.SetPosition(*t.position)
+        self._label.VisibilityOn()
 
     def set_targets_visible(self, visible: bool) -> None:
         """Show or hide every target gizmo (for pictures of the bare pose)."""
@@ -474,7 +424,7 @@ class Viewport:
 
     # -- camera ------------------------------------------------------------------
     def character_bounds(self) -> tuple[float, ...]:
-        P = self.doc.solver.world_positions()
+        P = self.doc.world_positions()
         T = np.array([t.position for t in self.doc.targets.values()] or np.zeros((0, 3))).reshape(-1, 3)
         pts = np.vstack([P, T])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -497,7 +447,7 @@ class Viewport:
     def frame_all(self, margin: float = 0.14) -> None:
         """Fit the character and its targets in the view, keeping the viewing direction."""
         cam = self.plotter.camera
-        P = self.doc.solver.world_positions()
+        P = self.doc.world_positions()
         T = np.array([t.position for t in self.doc.targets.values()]).reshape(-1, 3)
         pts = np.vstack([P, T])
         center = (pts.min(axis=0) + pts.max(axis=0)) / 2

@@ -2,12 +2,13 @@
 
     xvfb-run -a -s "-screen 0 1600x1100x24" python benchmarks/bench_app.py [--frames 300]
 
-1. The real :class:`gsik_studio.main_window.MainWindow` (1280x800) for ``--frames``
+1. The real :class:`gsik_studio.window.MainWindow` (1280x800) for ``--frames``
    frames while the targets move: both hands circle, the head sways. Each
    frame is what the app does when the artist drags: a target move goes
    through the document's command (one merged undo step), the window's
-   frame tick steps the solver and updates the scene in place, then Qt
-   paints the viewport (one VTK render).
+   frame loop (:class:`gsik_studio.model.FrameLoop`, driven here instead of
+   by the window's timer) steps the solver and updates the scene in place,
+   then Qt paints the viewport (one VTK render).
 2. A bare PyVista scene in a ``QtInteractor`` of the viewport's size with the
    same objects (the same kinds and counts of actors, sphere widgets and the
    box widget), whose points are moved in place each frame and rendered the
@@ -70,25 +71,23 @@ def _pump(app, plotter, counter: RenderCounter) -> None:
 
 
 class AppRun:
-    """The real window; each frame moves three targets through a document command, ticks, paints."""
+    """The real window; each frame moves three targets through a document command, runs one frame of the loop, paints."""
 
     def __init__(self, size: tuple[int, int]):
         import tempfile
 
         from PySide6 import QtCore
 
-        from gsik_studio.main_window import MainWindow
+        from gsik_studio.window import MainWindow
 
         self.app = _app()
         self._scratch = tempfile.TemporaryDirectory()
         settings = QtCore.QSettings(os.path.join(self._scratch.name, "bench.ini"), QtCore.QSettings.IniFormat)
-        self.w = w = MainWindow(settings=settings)
+        self.w = w = MainWindow(settings=settings, run_timers=False)  # this benchmark drives w.loop itself
         w.resize(*size)
         w.show()
         for _ in range(20):
             self.app.processEvents()
-        w.timer.stop()  # the benchmark calls tick() itself, back to back:
-        w._ensure_running = lambda: None  # keep the frame timer off (an edit would restart it)
         self.counter = RenderCounter(w.plotter)
         self.start = {n: np.array(t.position) for n, t in w.doc.targets.items()}
         self.app_times, self.solve_times, self.frame_times = [], [], []
@@ -104,7 +103,7 @@ class AppRun:
             "right_hand": start["right_hand"] + [0.15 * np.sin(a), 0.25 - 0.15 * np.cos(a), 0.35],
             "head": start["head"] + [0.05 * np.sin(a), 0.03, 0.0],
         }, drag=1)
-        w.tick()
+        w.loop.solve_frame()
         t1 = time.perf_counter()
         _pump(self.app, w.plotter, self.counter)
         t2 = time.perf_counter()
@@ -134,7 +133,7 @@ class BareRun:
         from PySide6 import QtWidgets
         from vtkmodules.util.numpy_support import vtk_to_numpy
 
-        from gsik_studio.viewport import _glyph_actor
+        from gsik_studio.scene import glyph_actor
 
         vp = source.w.viewport
         self.app = _app()
@@ -161,7 +160,7 @@ class BareRun:
             self.dynamic.append(pd)
         for name in ("joints", "effectors"):
             pd = pv.PolyData(vtk_to_numpy(vp.actors[name].GetMapper().GetInput().GetPoints().GetData()).copy())
-            pl.add_actor(_glyph_actor(pd, 0.022, None, (0.8, 0.8, 0.8)))
+            pl.add_actor(glyph_actor(pd, 0.022, None, (0.8, 0.8, 0.8)))
             self.dynamic.append(pd)
         pl.add_mesh(copy("root"), color="yellow", lighting=False)
         label = vtk.vtkBillboardTextActor3D()

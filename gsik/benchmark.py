@@ -13,11 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gsik import _kernels
 from gsik._jit import njit
 from gsik.skeleton import Skeleton
 from gsik.io.skeleton_yaml import load_skeleton
 from gsik.solver import PAPER_METHOD, Solver
+from gsik.kernels.step import step
 from gsik.targets import Target
 
 #: Kenwright (2012), Table 1: one frame step of the biped, C++, Intel i7-2600 [ms].
@@ -55,22 +55,23 @@ class StepTiming:
 
 
 @njit(cache=True)
-def _compiled_steps(model, root, W, tp, tR, rw, q, x, lam, sv, R, p, err, st, work, q0, R0, p0, n, step_too):
+def _compiled_steps(inputs, q0, R0, p0, n, step_too):
     # Restore the start pose before each step so every step does the full work; time the restore alone too.
+    model, settings, targets, root, W, q, ws = inputs
     for _ in range(n):
         q[:] = q0
-        R[:, :, :] = R0
-        p[:, :] = p0
-        x[:] = 0.0
+        ws.R[:, :, :] = R0
+        ws.p[:, :] = p0
+        ws.x[:] = 0.0
         if step_too:
-            _kernels.step(model, root, W, tp, tR, rw, q, x, lam, sv, R, p, err, st, work)
+            step(model, settings, targets, root, W, q, ws)
 
 
 def _compiled_us(solver: Solver, q0: np.ndarray, repeats: int) -> float:
     """Median over blocks of the per-step time inside a compiled loop, minus the restore's time."""
     solver.set_q(q0)
     R0, p0 = solver.world_rotations(), solver.world_positions()
-    args = solver._step_args() + (q0, R0, p0)
+    args = (solver._kernel_inputs()[1], q0, R0, p0)
     per = []
     for _ in range(max(5, repeats // 200)):
         t = time.perf_counter_ns()
@@ -104,7 +105,7 @@ def table_1(skeleton: Skeleton | None = None, repeats: int = 3000, seed: int = 0
             q0 = solver.q
             solver.step()  # compile before timing
 
-            args = solver._step_args()
+            args = solver._kernel_inputs()[1]
             public = np.empty(repeats)
             kernel = np.empty(repeats)
             # Every timed step starts from the same pose (restored untimed), so each does the full work.
@@ -115,7 +116,7 @@ def table_1(skeleton: Skeleton | None = None, repeats: int = 3000, seed: int = 0
                 t_public = time.perf_counter_ns() - t
                 solver.set_q(q0)
                 t = time.perf_counter_ns()
-                _kernels.step(*args)
+                step(*args)  # through numba's type dispatch, as any caller from Python
                 t_kernel = time.perf_counter_ns() - t
                 if i >= 100:  # warm-up
                     public[i - 100], kernel[i - 100] = t_public, t_kernel
@@ -230,7 +231,7 @@ def stability(skeleton: Skeleton | None = None, frames: int = 400) -> list[Stabi
             r = solver.step(targets)
             nan |= not np.all(np.isfinite(r.q))
             changes.append(float(np.abs(r.q - q0).max()))
-        out.append(StabilityResult(method, max(changes[-100:]), r.status.value, nan))
+        out.append(StabilityResult(method, max(changes[-100:]), r.status.label, nan))
     return out
 
 

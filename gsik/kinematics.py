@@ -12,7 +12,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gsik import _kernels
+from gsik.kernels import KinematicModel
+from gsik.kernels import kinematics as kernels
+from gsik.kernels.kinematics import forward_kinematics
 
 if TYPE_CHECKING:  # annotations only: the skeleton imports this module for its FK shortcuts
     from gsik.skeleton import Skeleton
@@ -63,22 +65,22 @@ def topology(skeleton: Skeleton, root: str | None = None, effectors: Sequence[st
     return Topology(int(root_frame), tuple(effectors), frames, np.ascontiguousarray(sign), dofs, count)
 
 
-def model_arrays(skeleton: Skeleton, topo: Topology) -> tuple:
-    """The tuple of arrays the kernels take as ``model``."""
-    return (
-        skeleton.frame_parent,
-        skeleton.frame_offset,
-        skeleton.frame_rotation,
-        skeleton.frame_axis,
-        skeleton.frame_dof,
-        skeleton.dof_frame,
-        skeleton.lower,
-        skeleton.upper,
-        topo.effector_frame,
-        topo.sign,
-        topo.effector_dofs,
-        topo.effector_dof_count,
-    )
+def kinematic_model(skeleton: Skeleton, topo: Topology | None = None) -> KinematicModel:
+    """The :class:`~gsik.kernels.KinematicModel` the kernels read: ``skeleton``'s arrays and ``topo``'s
+    effectors (none without a topology: enough for forward kinematics)."""
+    if topo is None:
+        topo = _no_effectors(skeleton.n_dofs)
+    return KinematicModel(skeleton.frame_parent, skeleton.frame_offset, skeleton.frame_rotation, skeleton.frame_axis,
+                          skeleton.frame_dof, skeleton.dof_frame, skeleton.lower, skeleton.upper,
+                          topo.effector_frame, topo.sign, topo.effector_dofs, topo.effector_dof_count)
+
+
+def _no_effectors(n_dofs: int) -> Topology:
+    arrays = (np.zeros(0, dtype=np.int64), np.zeros((0, n_dofs)), np.zeros((0, n_dofs), dtype=np.int64),
+              np.zeros(0, dtype=np.int64))
+    for a in arrays:
+        a.flags.writeable = False  # the same array types as a real topology's: no second compilation
+    return Topology(-1, (), *arrays)
 
 
 def world_frames(
@@ -93,10 +95,7 @@ def world_frames(
     else:
         root_frame = skeleton.frame_of(skeleton.root if root is None else root)
         W = np.ascontiguousarray(world_from_root, dtype=float)
-    _kernels.forward_kinematics(
-        skeleton.frame_parent, skeleton.frame_offset, skeleton.frame_rotation, skeleton.frame_axis,
-        skeleton.frame_dof, q, root_frame, W, R, p,
-    )
+    forward_kinematics(kinematic_model(skeleton), q, root_frame, W, R, p)
     return R, p
 
 
@@ -127,6 +126,5 @@ def jacobian(
         world_from_root = frame_transforms(skeleton, skeleton.validate_q(q))[topo.root_frame]
     R, p = world_frames(skeleton, q, world_from_root, root if root is not None else skeleton.root)
     J = np.empty((6 * len(topo.effector_names), skeleton.n_dofs))
-    _kernels.jacobian(R, p, skeleton.frame_axis, skeleton.dof_frame, topo.effector_frame, topo.sign,
-                      topo.effector_dofs, topo.effector_dof_count, J)
+    kernels.jacobian(kinematic_model(skeleton, topo), R, p, J)
     return J

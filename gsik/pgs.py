@@ -10,7 +10,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik import _kernels
+from gsik.kernels import N_STATS, O_RESIDUAL, O_SWEEPS, O_UPDATE
+from gsik.kernels import pgs as kernels
 from gsik.errors import SolverError
 
 
@@ -22,14 +23,18 @@ class PgsInfo(NamedTuple):
     update: float
 
 
+def _bound(value, n: int, none: float) -> np.ndarray:
+    """A bound (n,): ``value`` broadcast, or ``none`` everywhere when it is None."""
+    return np.full(n, none) if value is None else np.ascontiguousarray(np.broadcast_to(value, (n,)), dtype=float)
+
+
 def _check(A, b, lower, upper, x0) -> tuple[np.ndarray, ...]:
     A = np.ascontiguousarray(A, dtype=float)
     b = np.ascontiguousarray(b, dtype=float)
     n = b.shape[0] if b.ndim == 1 else -1
     if b.ndim != 1 or A.shape != (n, n):
         raise SolverError(f"PGS needs A of shape (n, n) and b of shape (n,), got {A.shape} and {b.shape}")
-    lo = np.full(n, -np.inf) if lower is None else np.ascontiguousarray(np.broadcast_to(lower, (n,)), dtype=float)
-    hi = np.full(n, np.inf) if upper is None else np.ascontiguousarray(np.broadcast_to(upper, (n,)), dtype=float)
+    lo, hi = _bound(lower, n, -np.inf), _bound(upper, n, np.inf)
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(b))):
         raise SolverError("PGS needs finite A and b")
     if np.any(np.diag(A) <= 0):
@@ -65,11 +70,11 @@ def projected_gauss_seidel(
     """
     A, b, lo, hi, x = _check(A, b, lower, upper, x0)
     prev = np.zeros_like(x) if x_prev is None else np.ascontiguousarray(x_prev, dtype=float)
-    stats = np.zeros(_kernels.N_STATS)
-    _kernels.projected_gauss_seidel(A, b, x, lo, hi, int(sweeps), float(residual_tolerance),
+    stats = np.zeros(N_STATS)
+    kernels.projected_gauss_seidel(A, b, x, lo, hi, int(sweeps), float(residual_tolerance),
                                     float(update_tolerance), prev, float(stall_tolerance), stats)
-    return x, PgsInfo(int(stats[_kernels.O_SWEEPS]), float(stats[_kernels.O_RESIDUAL]),
-                      float(stats[_kernels.O_UPDATE]))
+    return x, PgsInfo(int(stats[O_SWEEPS]), float(stats[O_RESIDUAL]),
+                      float(stats[O_UPDATE]))
 
 
 def solve_bounded(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None, upper: np.ndarray | None = None,
@@ -81,7 +86,7 @@ def solve_bounded(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
     :meth:`gsik.Solver.solve` uses on each linearisation.
     """
     A, b, lo, hi, x = _check(A, b, lower, upper, None)
-    stats = np.zeros(_kernels.N_STATS)
-    _kernels.bounded_solve(A, b, x, lo, hi, int(sweeps), stats)
-    return x, PgsInfo(int(stats[_kernels.O_SWEEPS]), float(stats[_kernels.O_RESIDUAL]),
-                      float(stats[_kernels.O_UPDATE]))
+    stats = np.zeros(N_STATS)
+    kernels.bounded_solve(A, b, x, lo, hi, int(sweeps), stats)
+    return x, PgsInfo(int(stats[O_SWEEPS]), float(stats[O_RESIDUAL]),
+                      float(stats[O_UPDATE]))

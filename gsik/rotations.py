@@ -7,6 +7,8 @@ dimensions: ``(..., 3, 3)``, ``(..., 4)``, ``(..., 3)``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: Largest deviation from orthonormality accepted as a rotation matrix.
@@ -61,7 +63,7 @@ def rotvec_from_matrix(R: np.ndarray) -> np.ndarray:
     Accurate over the whole range, including angles near pi where the
     antisymmetric part vanishes.
     """
-    from gsik._kernels import rotvec_from_matrix as log_map
+    from gsik.kernels.kinematics import rotvec_from_matrix as log_map
 
     return log_map(np.ascontiguousarray(R, dtype=float))
 
@@ -85,22 +87,28 @@ def matrix_from_quaternion(q: np.ndarray) -> np.ndarray:
 
 def quaternion_from_matrix(R: np.ndarray) -> np.ndarray:
     """Unit quaternion (4,) ``(w, x, y, z)`` with ``w >= 0`` of a rotation matrix (3, 3)."""
-    R = np.asarray(R, dtype=float)
-    t = np.trace(R)
+    return np.array(quaternion_from_rows(np.asarray(R, dtype=float).tolist()))
+
+
+def quaternion_from_rows(m: list) -> tuple[float, float, float, float]:
+    """:func:`quaternion_from_matrix` of a rotation given as nested lists (3, 3), in plain floats (fast)."""
+    t = m[0][0] + m[1][1] + m[2][2]
     if t > 0.0:
-        s = 2.0 * np.sqrt(t + 1.0)
-        q = np.array([0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s])
+        s = 2.0 * math.sqrt(t + 1.0)
+        q = [0.25 * s, (m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s]
     else:
-        i = int(np.argmax(np.diag(R)))
+        diag = [m[0][0], m[1][1], m[2][2]]
+        i = diag.index(max(diag))
         j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * np.sqrt(max(1.0 + R[i, i] - R[j, j] - R[k, k], 1e-300))
-        q = np.empty(4)
-        q[0] = (R[k, j] - R[j, k]) / s
+        s = 2.0 * math.sqrt(max(1.0 + m[i][i] - m[j][j] - m[k][k], 1e-300))
+        q = [0.0] * 4
+        q[0] = (m[k][j] - m[j][k]) / s
         q[1 + i] = 0.25 * s
-        q[1 + j] = (R[j, i] + R[i, j]) / s
-        q[1 + k] = (R[k, i] + R[i, k]) / s
-    q /= np.linalg.norm(q)
-    return -q if q[0] < 0.0 else q
+        q[1 + j] = (m[j][i] + m[i][j]) / s
+        q[1 + k] = (m[k][i] + m[i][k]) / s
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    sign = -1.0 if q[0] < 0.0 else 1.0
+    return (sign * q[0] / norm, sign * q[1] / norm, sign * q[2] / norm, sign * q[3] / norm)
 
 
 def is_rotation_matrix(R: np.ndarray, tolerance: float = ROTATION_TOLERANCE) -> bool:

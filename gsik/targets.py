@@ -1,107 +1,228 @@
-"""Effector targets: validated once, where they enter."""
+"""Effector targets: validated once, where they enter, and cheap to make.
+
+A target is made on every mouse move while dragging, so construction stays
+on a fast path of plain float checks (no ``np.allclose``, no SVD) for the
+usual inputs: a float (3,) array or list, a (4,) quaternion, a (3, 3) matrix.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+import struct
 
 import numpy as np
 
 from gsik.errors import TargetError
-from gsik.rotations import ROTATION_TOLERANCE, is_rotation_matrix, matrix_from_quaternion, quaternion_from_matrix
+from gsik.rotations import ROTATION_TOLERANCE, quaternion_from_rows
+
+#: How far from unit norm a target quaternion may be [-] (the rotation uses it normalised).
+QUATERNION_TOLERANCE = ROTATION_TOLERANCE * 100
+#: The identity orientation (w, x, y, z): what a target made without an orientation holds.
+IDENTITY = (1.0, 0.0, 0.0, 0.0)
+# Fields in value order: equality, hashing and replace() all walk this one list.
+_FIELDS = ("position", "orientation", "weight", "position_only", "enabled")
+_PACK3 = struct.Struct("3d").pack
+_PACK9 = struct.Struct("9d").pack
+_EYE = np.frombuffer(_PACK9(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)).reshape(3, 3)
 
 
-@dataclass(frozen=True, eq=False)
 class Target:
-    """A 6-DOF goal for one end-effector.
+    """An immutable 6-DOF goal for one end-effector.
 
     Args:
         position: World position (3,) [m].
-        orientation: World orientation as a rotation matrix (3, 3) or a unit
-            quaternion (4,) ``(w, x, y, z)``; ``None`` for position only.
+        orientation: World orientation as a unit quaternion (4,) ``(w, x, y, z)``
+            (kept exactly as given) or a rotation matrix (3, 3); ``None`` for a
+            position-only target (identity orientation, ``position_only`` set).
         weight: Relative importance (>= 0) in the weighted least squares.
         position_only: Ignore the orientation (kept, so it can be re-enabled).
+        enabled: False leaves the effector free: the solver skips the target.
+
+    Attributes:
+        position: Read-only float array (3,) [m].
+        orientation: Unit quaternion ``(w, x, y, z)`` as a tuple of 4 floats.
+        rotation: The orientation as a read-only rotation matrix (3, 3).
+        weight, position_only, enabled: As given (float, bool, bool).
 
     Raises:
         TargetError: on NaN or infinite values, wrong shapes, a matrix that
             is not a rotation, a quaternion that is not of unit norm, or a
-            negative weight. Nothing is stored from a rejected target.
+            negative weight.
 
-    ``position`` and ``orientation`` are stored as read-only float arrays; the
-    orientation always as a (3, 3) matrix.
+    Targets compare and hash by value (position, orientation, weight,
+    position_only, enabled), so whole poses compare equal.
     """
 
-    position: np.ndarray
-    orientation: np.ndarray | None = None
-    weight: float = 1.0
-    position_only: bool = False
+    __slots__ = ("position", "_orientation", "rotation", "weight", "position_only", "enabled", "_key")
 
-    def __post_init__(self):
-        try:
-            p = np.array(self.position, dtype=float)
-        except (TypeError, ValueError):
-            raise TargetError(f"target position must be 3 numbers, got {self.position!r}") from None
-        if p.shape != (3,):
-            raise TargetError(f"target position must have shape (3,), got {p.shape}")
-        if not np.all(np.isfinite(p)):
-            raise TargetError(f"target position must be finite, got {p.tolist()}")
-        p.flags.writeable = False
-        object.__setattr__(self, "position", p)
-        if self.orientation is not None:
-            object.__setattr__(self, "orientation", _rotation(self.orientation))
-        try:
-            w = float(self.weight)
-        except (TypeError, ValueError):
-            raise TargetError(f"target weight must be a number, got {self.weight!r}") from None
-        if not np.isfinite(w) or w < 0.0:
-            raise TargetError(f"target weight must be finite and >= 0, got {self.weight!r}")
-        object.__setattr__(self, "weight", w)
-        object.__setattr__(self, "position_only", bool(self.position_only))
+    def __init__(self, position, orientation=None, weight: float = 1.0, position_only: bool = False,
+                 enabled: bool = True):
+        if orientation is None:
+            q, R, position_only = IDENTITY, _EYE, True
+        else:
+            q, R = _orientation(orientation)
+        self._fill(_position(position), q, R, weight, position_only, enabled)
+
+    def _fill(self, p: np.ndarray, q: tuple, R: np.ndarray, weight, position_only, enabled) -> None:
+        _set = object.__setattr__
+        _set(self, "position", p)
+        _set(self, "_orientation", q)
+        _set(self, "rotation", R)
+        _set(self, "weight", _weight(weight))
+        _set(self, "position_only", bool(position_only))
+        _set(self, "enabled", bool(enabled))
+        _set(self, "_key", None)
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"Target is immutable; use replace({name}=...)")
+
+    def __delattr__(self, name):
+        raise AttributeError("Target is immutable")
+
+    def _values(self) -> tuple:
+        if self._key is None:
+            values = tuple(getattr(self, f) for f in _FIELDS)
+            object.__setattr__(self, "_key", (tuple(self.position.tolist()),) + values[1:])
+        return self._key
+
+    def __eq__(self, other):
+        if not isinstance(other, Target):
+            return NotImplemented
+        return self is other or self._values() == other._values()
+
+    def __hash__(self):
+        return hash(self._values())
+
+    def __repr__(self):
+        return "Target(" + ", ".join(f"{n}={v!r}" for n, v in zip(_FIELDS, self._values())) + ")"
+
+    def __reduce__(self):
+        return _rebuild, self._values()
+
+    @property
+    def orientation(self) -> tuple[float, float, float, float]:
+        """Unit quaternion ``(w, x, y, z)``: as given, or (given a matrix) made from it on first use."""
+        if self._orientation is None:
+            object.__setattr__(self, "_orientation", quaternion_from_rows(self.rotation.tolist()))
+        return self._orientation
 
     @property
     def uses_orientation(self) -> bool:
         """True if the orientation rows take part in the solve."""
-        return self.orientation is not None and not self.position_only
+        return not self.position_only
 
     @property
-    def quaternion(self) -> np.ndarray | None:
-        """The orientation as a unit quaternion (4,) ``(w, x, y, z)``, or ``None``."""
-        return None if self.orientation is None else quaternion_from_matrix(self.orientation)
+    def quaternion(self) -> np.ndarray:
+        """The orientation as a unit quaternion (4,) ``(w, x, y, z)`` array (a copy)."""
+        return np.array(self.orientation)
 
     @classmethod
-    def from_transform(cls, T: np.ndarray, weight: float = 1.0, position_only: bool = False) -> Target:
-        """A target at a world transform (4, 4)."""
-        T = np.asarray(T, dtype=float)
+    def from_transform(cls, world_from_effector: np.ndarray, weight: float = 1.0, position_only: bool = False,
+                       enabled: bool = True) -> Target:
+        """A target at a world transform (4, 4); its rotation block becomes :attr:`rotation` as given."""
+        T = world_from_effector if type(world_from_effector) is np.ndarray else np.asarray(world_from_effector,
+                                                                                              dtype=float)
         if T.shape != (4, 4):
             raise TargetError(f"target transform must have shape (4, 4), got {T.shape}")
-        return cls(T[:3, 3], T[:3, :3], weight, position_only)
+        return cls(T[:3, 3], T[:3, :3], weight, position_only, enabled)
 
     def replace(self, **changes) -> Target:
-        """A copy with some fields changed (validated again)."""
-        fields = dict(position=self.position, orientation=self.orientation, weight=self.weight,
-                      position_only=self.position_only)
-        fields.update(changes)
-        return Target(**fields)
+        """A copy with some fields changed (validated again; an unchanged orientation keeps its matrix)."""
+        unknown = sorted(set(changes) - set(_FIELDS))
+        if unknown:
+            raise TargetError(f"unknown Target field(s) {unknown}; valid: {list(_FIELDS)}")
+        values = {f: getattr(self, f) for f in _FIELDS if f != "orientation"}  # the quaternion only if needed
+        values.update(changes)
+        if "orientation" in changes:
+            return Target(**values)
+        new = Target.__new__(Target)  # same orientation: keep its quaternion and matrix
+        new._fill(_position(values["position"]), self._orientation, self.rotation, values["weight"],
+                  values["position_only"], values["enabled"])
+        return new
 
 
-def _rotation(value) -> np.ndarray:
+def _rebuild(position, orientation, weight, position_only, enabled) -> Target:
+    return Target(position, orientation, weight, position_only, enabled)
+
+
+def _position(value) -> np.ndarray:
+    if type(value) is np.ndarray and value.shape == (3,):
+        xyz = value.tolist()
+    else:
+        try:
+            a = np.array(value, dtype=float)
+        except (TypeError, ValueError):
+            raise TargetError(f"target position must be 3 numbers, got {value!r}") from None
+        if a.shape != (3,):
+            raise TargetError(f"target position must have shape (3,), got {a.shape}")
+        xyz = a.tolist()
     try:
-        a = np.array(value, dtype=float)
+        x, y, z = float(xyz[0]), float(xyz[1]), float(xyz[2])
+    except (TypeError, ValueError):
+        raise TargetError(f"target position must be 3 numbers, got {value!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+        raise TargetError(f"target position must be finite, got {[x, y, z]}")
+    return np.frombuffer(_PACK3(x, y, z))  # a fresh read-only float64 array
+
+
+def _weight(value) -> float:
+    try:
+        w = float(value)
+    except (TypeError, ValueError):
+        raise TargetError(f"target weight must be a number, got {value!r}") from None
+    if not math.isfinite(w) or w < 0.0:
+        raise TargetError(f"target weight must be finite and >= 0, got {value!r}")
+    return w
+
+
+def _orientation(value) -> tuple[tuple[float, float, float, float] | None, np.ndarray]:
+    """``(quaternion, read-only matrix)`` of a quaternion (4,) or a rotation matrix (3, 3) (quaternion None)."""
+    if type(value) is tuple and len(value) == 4:
+        return _from_quaternion(value)
+    try:
+        a = value if type(value) is np.ndarray and value.dtype == np.float64 else np.array(value, dtype=float)
     except (TypeError, ValueError):
         raise TargetError(f"target orientation must be a 3x3 rotation matrix or a quaternion, got {value!r}") from None
-    if not np.all(np.isfinite(a)):
-        raise TargetError(f"target orientation must be finite, got {a.tolist()}")
     if a.shape == (4,):
-        norm = float(np.linalg.norm(a))
-        if abs(norm - 1.0) > ROTATION_TOLERANCE * 100:
-            raise TargetError(f"target quaternion (w, x, y, z) must have unit norm, got norm {norm:.6g}")
-        a = matrix_from_quaternion(a / norm)
-    elif a.shape == (3, 3):
-        if not is_rotation_matrix(a):
-            raise TargetError("target orientation is not a rotation matrix (must be orthonormal with determinant +1)")
-        # Re-orthonormalise so the kernels' log map sees an exact rotation.
+        return _from_quaternion(tuple(a.tolist()))
+    if a.shape == (3, 3):
+        return _from_matrix(a)
+    raise TargetError(f"target orientation must have shape (3, 3) or (4,), got {a.shape}")
+
+
+def _from_quaternion(q: tuple) -> tuple[tuple[float, float, float, float], np.ndarray]:
+    try:
+        w, x, y, z = q = (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
+    except (TypeError, ValueError):
+        raise TargetError(f"target quaternion (w, x, y, z) must be 4 numbers, got {q!r}") from None
+    n2 = w * w + x * x + y * y + z * z
+    if not math.isfinite(n2):
+        raise TargetError(f"target orientation must be finite, got {list(q)}")
+    norm = math.sqrt(n2)
+    if abs(norm - 1.0) > QUATERNION_TOLERANCE:
+        raise TargetError(f"target quaternion (w, x, y, z) must have unit norm, got norm {norm:.6g}")
+    s = 2.0 / n2
+    R = np.frombuffer(_PACK9(1.0 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y),
+                             s * (x * y + w * z), 1.0 - s * (x * x + z * z), s * (y * z - w * x),
+                             s * (x * z - w * y), s * (y * z + w * x), 1.0 - s * (x * x + y * y))).reshape(3, 3)
+    return q, R
+
+
+def _from_matrix(a: np.ndarray) -> tuple[None, np.ndarray]:
+    m = a.tolist()
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = m
+    # Columns orthonormal and det > 0, in plain floats (np.allclose costs more than the whole target).
+    off = max(abs(a00 * a00 + a10 * a10 + a20 * a20 - 1.0), abs(a01 * a01 + a11 * a11 + a21 * a21 - 1.0),
+              abs(a02 * a02 + a12 * a12 + a22 * a22 - 1.0), abs(a00 * a01 + a10 * a11 + a20 * a21),
+              abs(a00 * a02 + a10 * a12 + a20 * a22), abs(a01 * a02 + a11 * a12 + a21 * a22))
+    det = a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) + a02 * (a10 * a21 - a11 * a20)
+    if not (off <= ROTATION_TOLERANCE and det > 0.0):  # NaN fails too
+        if not all(math.isfinite(v) for row in m for v in row):
+            raise TargetError(f"target orientation must be finite, got {m}")
+        raise TargetError("target orientation is not a rotation matrix (must be orthonormal with determinant +1)")
+    if off > 1e-12:
+        # Re-orthonormalise what is visibly off, so the kernels' log map sees an exact rotation.
         u, _, vt = np.linalg.svd(a)
-        a = u @ vt
-    else:
-        raise TargetError(f"target orientation must have shape (3, 3) or (4,), got {a.shape}")
-    a.flags.writeable = False
-    return a
+        m = (u @ vt).tolist()
+    R = np.frombuffer(_PACK9(*m[0], *m[1], *m[2])).reshape(3, 3)  # read-only, the values as given
+    return None, R  # the quaternion is computed when first asked for

@@ -63,7 +63,8 @@ def test_effector_topology_lists_exactly_the_dofs_on_the_path(biped):
 
 def test_fused_linear_system_equals_the_normal_equations_of_the_jacobian(biped):
     """The kernels build J^T W J and J^T W e without forming J; check them against NumPy on J."""
-    from gsik import _kernels
+    from gsik.kernels.kinematics import linear_system
+    from gsik.kinematics import kinematic_model
 
     rng = np.random.default_rng(7)
     q = random_q(biped, rng)
@@ -75,9 +76,7 @@ def test_fused_linear_system_equals_the_normal_equations_of_the_jacobian(biped):
     row_w = rng.uniform(0.1, 2.0, (len(topo.effector_names), 6))
     A = np.empty((biped.n_dofs, biped.n_dofs))
     b = np.empty(biped.n_dofs)
-    _kernels.linear_system(R, p, biped.frame_axis, biped.dof_frame, topo.effector_frame, topo.sign,
-                           topo.effector_dofs, topo.effector_dof_count, e, row_w, A, b,
-                           np.empty((2, biped.n_dofs, 6)))
+    linear_system(kinematic_model(biped, topo), R, p, e, row_w, A, b, np.empty((2, biped.n_dofs, 6)))
     w = row_w.ravel()
     np.testing.assert_allclose(A, J.T @ (w[:, None] * J), atol=1e-12)
     np.testing.assert_allclose(b, J.T @ (w * e), atol=1e-12)

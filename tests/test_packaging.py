@@ -14,7 +14,11 @@ def test_built_package_finds_the_bundled_biped_and_starts_without_compiling(tmp_
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(target), str(ROOT)],
                    check=True, capture_output=True, text=True)
-    assert list((target / "gsik" / "__pycache__").glob("*.nbi")), "the build compiled no kernels into the package"
+    assert list((target / "gsik").glob("**/__pycache__/*.nbi")), "the build compiled no kernels into the package"
+    for package, folder in (("gsik", ROOT / "gsik"), ("gsik_studio", ROOT / "app"), ("gsik/skeletons", ROOT / "skeletons")):
+        for source in folder.rglob("*.py"):
+            installed = target / package / source.relative_to(folder)
+            assert installed.is_file(), f"{source.relative_to(ROOT)} is missing from the built package (pyproject packages)"
     code = ("import gsik, gsik_studio, importlib.resources as r; from gsik._warmup import kernel_cache_stats; "
             "sk = gsik.load_skeleton('biped'); s = gsik.Solver(sk); "
             "t = {n: gsik.Target.from_transform(T) for n, T in s.effector_poses().items()}; s.step(t); s.solve(t); "

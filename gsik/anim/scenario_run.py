@@ -259,7 +259,7 @@ def _table_row(r: ScenarioReport) -> tuple[str, ...]:
     return (
         r.name,
         r.root,
-        r.status.value,
+        r.status.label,
         "yes" if r.settled else "NO",
         _dash_or(r.settle_frames),
         str(r.settle_sweeps),

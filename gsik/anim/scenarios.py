@@ -31,7 +31,7 @@ import numpy as np
 from gsik import validate
 from gsik.errors import ScenarioError, choices
 from gsik.kinematics import world_frames
-from gsik.io.pose import Pose, TargetPose
+from gsik.io.pose import Pose
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix, transform
 from gsik.skeleton import Skeleton
 from gsik.targets import Target
@@ -306,8 +306,8 @@ def scenario_pose(scenario: Scenario, q: np.ndarray | None = None) -> Pose:
         if e in scenario.effectors:
             j = scenario.effectors.index(e)
             quaternion = quaternion_from_matrix(scenario.rotations[k, j])
-            targets[e] = TargetPose(tuple(scenario.positions[k, j]), tuple(quaternion))
+            targets[e] = Target(scenario.positions[k, j], tuple(quaternion))
         else:
-            targets[e] = TargetPose.from_transform(achieved[e], enabled=False)
+            targets[e] = Target.from_transform(achieved[e], enabled=False)
     return Pose(sk.name, sk.root, tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])),
                 dict(zip(sk.dof_names, (float(v) for v in q))), targets)

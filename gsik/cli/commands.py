@@ -51,14 +51,13 @@ def cmd_solve(args: argparse.Namespace, out: TextIO) -> int:
     pose = read.pose
     solver = gsik.Solver(sk.with_root(pose.root), q0=pose.q(sk), world_from_root=pose.world_from_root,
                          **settings_overrides(args))
-    targets = {name: gsik.Target(t.position, t.rotation, weight=t.weight, position_only=t.position_only)
-               for name, t in pose.targets.items() if t.enabled}
+    targets = {name: t for name, t in pose.targets.items() if t.enabled}
     start = time.perf_counter()
     result = solver.solve(targets)
     elapsed = time.perf_counter() - start
     out.write(f"pose {args.pose}: skeleton {sk.name}, root {pose.root}, {len(targets)} of "
               f"{len(pose.targets)} targets enabled\n")
-    out.write(f"status: {result.status.value} after {result.iterations} iterations ({result.sweeps} sweeps, "
+    out.write(f"status: {result.status.label} after {result.iterations} iterations ({result.sweeps} sweeps, "
               f"{result.attempts} attempt{'s' if result.attempts != 1 else ''}) in {elapsed * 1e3:.1f} ms\n")
     _write_errors(out, result, targets)
     if args.out:
@@ -140,7 +139,7 @@ def cmd_scenarios(args: argparse.Namespace, out: TextIO) -> int:
     out.write(format_table(reports) + "\n")
     if args.verbose:
         for r in reports:
-            out.write(f"\n{r.name}: {r.status.value}, {r.ms_per_frame:.3f} ms per frame\n")
+            out.write(f"\n{r.name}: {r.status.label}, {r.ms_per_frame:.3f} ms per frame\n")
             for name, (pe, oe) in r.errors().items():
                 out.write(f"  {name:<12} {mm(pe):>14} {deg(oe):>14}\n")
     if folder is not None:

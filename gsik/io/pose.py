@@ -49,7 +49,6 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import cached_property
 from types import MappingProxyType
 from typing import Any, NamedTuple
 
@@ -58,8 +57,9 @@ import yaml
 
 from gsik.errors import PoseError, choices
 from gsik.io.files import atomic_write_text, read_text
-from gsik.rotations import matrix_from_quaternion, quaternion_from_matrix, transform
+from gsik.rotations import matrix_from_quaternion, transform
 from gsik.skeleton import Skeleton
+from gsik.targets import Target
 
 #: The version of the pose format this module reads and writes.
 POSE_FORMAT = 1
@@ -76,9 +76,8 @@ _TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only")
 
 
 def _floats(value, n: int, what: str) -> tuple[float, ...]:
-    if isinstance(value, (tuple, list)) and len(value) == n and all(type(v) is float for v in value):
-        if all(math.isfinite(v) for v in value):  # the common case, without NumPy
-            return tuple(value)
+    if _plain_floats(value, n):  # the common case, without NumPy
+        return tuple(value)
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError):
@@ -90,66 +89,18 @@ def _floats(value, n: int, what: str) -> tuple[float, ...]:
     return tuple(float(v) for v in a)
 
 
+def _plain_floats(value, n: int) -> bool:
+    """True for a tuple or list of ``n`` finite Python floats."""
+    return (isinstance(value, (tuple, list)) and len(value) == n
+            and all(type(v) is float and math.isfinite(v) for v in value))
+
+
 def _unit_quaternion(value, what: str) -> tuple[float, float, float, float]:
     q = _floats(value, 4, what)
     norm = math.sqrt(sum(v * v for v in q))
     if abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE:
         raise PoseError(f"{what} must be a unit quaternion (w, x, y, z), got {list(q)} of norm {norm:.6g}")
     return q
-
-
-@dataclass(frozen=True)
-class TargetPose:
-    """One effector's target as stored in a pose.
-
-    Attributes:
-        position: World position (3,) [m].
-        orientation: World orientation, unit quaternion (w, x, y, z).
-        enabled: False leaves the effector free (the solver ignores it).
-        weight: Relative importance (>= 0).
-        position_only: True ignores the orientation in the solve (it is kept).
-    """
-
-    position: tuple[float, float, float]
-    orientation: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
-    enabled: bool = True
-    weight: float = 1.0
-    position_only: bool = False
-
-    def __post_init__(self):
-        object.__setattr__(self, "position", _floats(self.position, 3, "target position"))
-        object.__setattr__(self, "orientation", _unit_quaternion(self.orientation, "target orientation"))
-        w = _floats([self.weight], 1, "target weight")[0]
-        if w < 0.0:
-            raise PoseError(f"target weight must be >= 0, got {w!r}")
-        object.__setattr__(self, "weight", w)
-        object.__setattr__(self, "enabled", bool(self.enabled))
-        object.__setattr__(self, "position_only", bool(self.position_only))
-
-    @cached_property
-    def rotation(self) -> np.ndarray:
-        """The orientation as a rotation matrix (3, 3) (read-only)."""
-        q = np.array(self.orientation)
-        R = matrix_from_quaternion(q / np.linalg.norm(q))
-        R.flags.writeable = False
-        return R
-
-    @classmethod
-    def from_transform(cls, world_from_effector: np.ndarray, enabled: bool = True, weight: float = 1.0,
-                       position_only: bool = False) -> TargetPose:
-        """A target at a world transform (4, 4)."""
-        T = np.asarray(world_from_effector, dtype=float)
-        return cls(tuple(T[:3, 3]), tuple(quaternion_from_matrix(T[:3, :3])), enabled, weight, position_only)
-
-    def replace(self, **changes) -> TargetPose:
-        """A copy with some fields changed (validated again)."""
-        fields = dict(position=self.position, orientation=self.orientation, enabled=self.enabled,
-                      weight=self.weight, position_only=self.position_only)
-        fields.update(changes)
-        new = TargetPose(**fields)
-        if new.orientation == self.orientation and "rotation" in self.__dict__:
-            new.__dict__["rotation"] = self.__dict__["rotation"]  # same orientation: reuse the matrix
-        return new
 
 
 @dataclass(frozen=True)
@@ -162,7 +113,7 @@ class Pose:
         root_position: World position (3,) [m] of the root frame.
         root_orientation: World orientation of the root frame, unit quaternion (w, x, y, z).
         joints: ``{DOF name: angle [rad]}`` in the skeleton's DOF order (read-only).
-        targets: ``{effector name: TargetPose}`` for every effector of the root (read-only).
+        targets: ``{effector name: gsik.Target}`` for every effector of the root (read-only).
     """
 
     skeleton: str
@@ -170,7 +121,7 @@ class Pose:
     root_position: tuple[float, float, float]
     root_orientation: tuple[float, float, float, float]
     joints: Mapping[str, float]
-    targets: Mapping[str, TargetPose]
+    targets: Mapping[str, Target]
 
     def __post_init__(self):
         object.__setattr__(self, "root_position", _floats(self.root_position, 3, "root position"))
@@ -182,8 +133,8 @@ class Pose:
             joints[str(name)] = value
         targets = {}
         for name, t in dict(self.targets).items():
-            if not isinstance(t, TargetPose):
-                raise PoseError(f"target {name!r} must be a TargetPose, got {type(t).__name__}")
+            if not isinstance(t, Target):
+                raise PoseError(f"target {name!r} must be a gsik.Target, got {type(t).__name__}")
             targets[str(name)] = t
         object.__setattr__(self, "joints", MappingProxyType(joints))
         object.__setattr__(self, "targets", MappingProxyType(targets))
@@ -262,6 +213,11 @@ class _Reader:
     def mapping(self, value, path: tuple, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict:
         if not isinstance(value, dict):
             self.fail(path, f"must be a mapping of {', '.join(required + optional)}, got {_show(value)}")
+        self._keys(value, path, required, optional)
+        return value
+
+    def _keys(self, value: dict, path: tuple, required: tuple[str, ...], optional: tuple[str, ...]) -> None:
+        """Names only, none unknown, none of ``required`` missing."""
         keys = [k for k in value if not isinstance(k, str)]
         if keys:
             self.fail(path, f"keys must be names, got {keys[0]!r}")
@@ -271,7 +227,6 @@ class _Reader:
         missing = [k for k in required if k not in value]
         if missing:
             self.fail(path, f"missing field(s) {choices(missing)}")
-        return value
 
     def number(self, value, path: tuple) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -327,6 +282,22 @@ def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> Pos
     Raises:
         PoseError: naming ``source``, the line, the field and the bad value.
     """
+    data, lines = _parse(text, source)
+    r = _Reader(source, lines)
+    top = r.mapping(data, (), _TOP_KEYS)
+    _check_header(r, top, skeleton)
+    root = _read_root(r, top["root"], skeleton)
+    rt = r.mapping(top["root_transform"], ("root_transform",), _TRANSFORM_KEYS)
+    root_position = r.vector(rt["position"], 3, ("root_transform", "position"))
+    root_orientation = r.quaternion(rt["orientation"], ("root_transform", "orientation"))
+    joints, warnings = _read_joints(r, top["joints"], skeleton)
+    targets = _read_targets(r, top["targets"], tuple(n for n in skeleton.effector_sites if n != root), root)
+    pose = Pose(skeleton.name, root, root_position, root_orientation, joints, targets)
+    return PoseRead(pose, tuple(warnings))
+
+
+def _parse(text: str, source: str) -> tuple[Any, dict]:
+    """The YAML data and the line of every key path; YAML errors become :class:`PoseError`."""
     try:
         node = yaml.compose(text, Loader=yaml.SafeLoader)
         data = yaml.load(text, Loader=yaml.SafeLoader)
@@ -341,78 +312,79 @@ def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> Pos
         raise PoseError(f"{source}: empty file, expected a gsik pose (format: {POSE_FORMAT})")
     lines: dict = {}
     _key_lines(node, (), lines, source)
-    r = _Reader(source, lines)
-    top = r.mapping(data, (), _TOP_KEYS)
+    return data, lines
 
+
+def _check_header(r: _Reader, top: dict, skeleton: Skeleton) -> None:
+    """The format version and the skeleton's name."""
     fmt = top["format"]
     if isinstance(fmt, bool) or not isinstance(fmt, int):
         r.fail(("format",), f"must be the whole number {POSE_FORMAT}, got {_show(fmt)}")
     if fmt != POSE_FORMAT:
         newer = " (written by a newer gsik?)" if fmt > POSE_FORMAT else ""
         r.fail(("format",), f"unsupported pose format {fmt}{newer}; this gsik reads format {POSE_FORMAT}")
-
     name = r.name(top["skeleton"], ("skeleton",))
     if name != skeleton.name:
         r.fail(("skeleton",), f"pose is for skeleton {name!r}, but the skeleton is {skeleton.name!r}")
 
-    root = r.name(top["root"], ("root",))
+
+def _read_root(r: _Reader, value, skeleton: Skeleton) -> str:
+    root = r.name(value, ("root",))
     if root not in skeleton.joint_names and root not in skeleton.site_names:
         r.fail(("root",), f"unknown root {root!r}; valid: {choices(skeleton.effector_sites)} "
                           f"(or any joint or site: {choices(skeleton.joint_names + skeleton.site_names)})")
+    return root
 
-    rt = r.mapping(top["root_transform"], ("root_transform",), _TRANSFORM_KEYS)
-    root_position = r.vector(rt["position"], 3, ("root_transform", "position"))
-    root_orientation = r.quaternion(rt["orientation"], ("root_transform", "orientation"))
 
-    joints_in = top["joints"]
+def _require_names(r: _Reader, given: dict, field: str, valid: tuple[str, ...], what: tuple[str, str],
+                   why=lambda key: "") -> None:
+    """Every key of ``given`` is one of ``valid`` and every one of ``valid`` is given; ``what``: (key, value) nouns."""
+    for key in given:
+        if key not in valid:
+            r.fail((field, key), f"unknown {what[0]} {key!r}{why(key)}; valid: {choices(valid)}")
+    missing = [n for n in valid if n not in given]
+    if missing:
+        r.fail((field,), f"missing {what[1]}(s) for {choices(missing)}")
+
+
+def _read_joints(r: _Reader, joints_in, skeleton: Skeleton) -> tuple[dict[str, float], list[str]]:
+    """``{DOF: angle [rad]}`` clamped into the limits, and one warning per clamped angle."""
     if not isinstance(joints_in, dict):
         r.fail(("joints",), f"must be a mapping of DOF name to angle [rad], got {_show(joints_in)}")
-    warnings = []
-    for key in joints_in:
-        if key not in skeleton.dof_names:
-            r.fail(("joints", key), f"unknown joint {key!r}; valid: {choices(skeleton.dof_names)}")
-    missing = [n for n in skeleton.dof_names if n not in joints_in]
-    if missing:
-        r.fail(("joints",), f"missing angle(s) for {choices(missing)}")
-    joints = {}
+    _require_names(r, joints_in, "joints", skeleton.dof_names, ("joint", "angle"))
+    joints, warnings = {}, []
     for i, dof in enumerate(skeleton.dof_names):
         v = r.number(joints_in[dof], ("joints", dof))
         lo, hi = float(skeleton.lower[i]), float(skeleton.upper[i])
         if v < lo - LIMIT_TOLERANCE or v > hi + LIMIT_TOLERANCE:
             clamped = min(max(v, lo), hi)
-            line = lines.get(("joints", dof))
-            warnings.append(f"{source}:{line}: joints.{dof}: angle {v!r} rad is outside its limits "
-                            f"[{lo!r}, {hi!r}]; clamped to {clamped!r}")
+            warnings.append(f"{r.source}:{r.lines.get(('joints', dof))}: joints.{dof}: angle {v!r} rad is outside "
+                            f"its limits [{lo!r}, {hi!r}]; clamped to {clamped!r}")
             v = clamped
         joints[dof] = v
+    return joints, warnings
 
-    effectors = tuple(n for n in skeleton.effector_sites if n != root)
-    targets_in = top["targets"]
+
+def _read_targets(r: _Reader, targets_in, effectors: tuple[str, ...], root: str) -> dict[str, Target]:
     if not isinstance(targets_in, dict):
         r.fail(("targets",), f"must be a mapping of effector name to target, got {_show(targets_in)}")
-    for key in targets_in:
-        if key not in effectors:
-            why = " (it is the IK root)" if key == root else ""
-            r.fail(("targets", key), f"unknown effector {key!r}{why}; valid: {choices(effectors)}")
-    missing = [n for n in effectors if n not in targets_in]
-    if missing:
-        r.fail(("targets",), f"missing target(s) for {choices(missing)}")
-    targets = {}
-    for eff in effectors:
-        path = ("targets", eff)
-        t = r.mapping(targets_in[eff], path, _TARGET_KEYS[:2], _TARGET_KEYS[2:])
-        weight = r.number(t.get("weight", 1.0), path + ("weight",))
-        if weight < 0:
-            r.fail(path + ("weight",), f"must be >= 0, got {weight!r}")
-        targets[eff] = TargetPose(
-            position=r.vector(t["position"], 3, path + ("position",)),
-            orientation=r.quaternion(t["orientation"], path + ("orientation",)),
-            enabled=r.flag(t.get("enabled", True), path + ("enabled",)),
-            weight=weight,
-            position_only=r.flag(t.get("position_only", False), path + ("position_only",)),
-        )
-    pose = Pose(skeleton.name, root, root_position, root_orientation, joints, targets)
-    return PoseRead(pose, tuple(warnings))
+    _require_names(r, targets_in, "targets", effectors, ("effector", "target"),
+                   lambda key: " (it is the IK root)" if key == root else "")
+    return {eff: _read_target(r, targets_in[eff], ("targets", eff)) for eff in effectors}
+
+
+def _read_target(r: _Reader, value, path: tuple) -> Target:
+    t = r.mapping(value, path, _TARGET_KEYS[:2], _TARGET_KEYS[2:])
+    weight = r.number(t.get("weight", 1.0), path + ("weight",))
+    if weight < 0:
+        r.fail(path + ("weight",), f"must be >= 0, got {weight!r}")
+    return Target(
+        position=r.vector(t["position"], 3, path + ("position",)),
+        orientation=r.quaternion(t["orientation"], path + ("orientation",)),
+        weight=weight,
+        position_only=r.flag(t.get("position_only", False), path + ("position_only",)),
+        enabled=r.flag(t.get("enabled", True), path + ("enabled",)),
+    )
 
 
 def read_pose(path: str | os.PathLike, skeleton: Skeleton) -> PoseRead:

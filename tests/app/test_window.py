@@ -18,7 +18,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 @pytest.fixture()
 def window(qtbot, studio_settings):
-    from gsik_studio.main_window import MainWindow
+    from gsik_studio.window import MainWindow
 
     w = MainWindow(settings=studio_settings)
     w.resize(1280, 860)
@@ -296,7 +296,8 @@ def test_screenshot_shows_red_targets_green_effectors_and_axis_colours(qtbot, wi
 def test_joints_on_a_limit_are_highlighted(qtbot, window):
     from vtkmodules.util.numpy_support import vtk_to_numpy
 
-    from gsik_studio.viewport import LIMIT_COLOR, _rgb8
+    from gsik_studio.scene import rgb8 as _rgb8
+    from gsik_studio.viewport import LIMIT_COLOR
 
     sk = window.doc.skeleton
     q = sk.rest.copy()
@@ -348,7 +349,7 @@ def test_walk_button_plays_a_walk_as_one_undo_step(qtbot, window):
     before = window.doc.pose()
     pelvis = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("pelvis")]
     roots = set()
-    window.doc.changed.connect(lambda kind: roots.add(window.doc.root))
+    window.doc.events.pose.connect(lambda: roots.add(window.doc.root))
     pb = window.play_walk(n_steps=1)
     assert pb is not None and window.play_timer.isActive()
     window.play_timer.setInterval(1)  # play as fast as it draws
@@ -426,7 +427,7 @@ def test_view_presets_and_frame_all(qtbot, window):
 
 
 def test_window_geometry_and_solver_settings_are_remembered(qtbot, studio_settings):
-    from gsik_studio.main_window import MainWindow
+    from gsik_studio.window import MainWindow
 
     w = MainWindow(settings=studio_settings)
     w.resize(1111, 777)

@@ -12,7 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gsik
-from gsik.io.pose import Pose, PoseRead, TargetPose, pose_from_yaml, pose_to_yaml, read_pose, write_pose
+from gsik import Target
+from gsik.io.pose import Pose, PoseRead, pose_from_yaml, pose_to_yaml, read_pose, write_pose
 from gsik.rotations import quaternion_from_matrix
 
 
@@ -29,7 +30,7 @@ def _pose(skeleton, seed: int = 0) -> Pose:
     W = solver.world_from_root
     targets = {}
     for i, (name, T) in enumerate(solver.effector_poses().items()):
-        targets[name] = TargetPose.from_transform(T, enabled=i != 1, weight=float(rng.uniform(0, 3)),
+        targets[name] = Target.from_transform(T, enabled=i != 1, weight=float(rng.uniform(0, 3)),
                                                   position_only=i == 2)
     return Pose(skeleton.name, solver.root, tuple(W[:3, 3] + rng.normal(0, 0.1, 3)),
                 tuple(quaternion_from_matrix(W[:3, :3])), dict(zip(skeleton.dof_names, q.tolist())), targets)
@@ -93,7 +94,7 @@ def test_other_root_round_trips(skeleton):
     solver = gsik.Solver(skeleton)
     solver.set_root("left_foot")
     W = solver.world_from_root
-    targets = {n: TargetPose.from_transform(T) for n, T in solver.effector_poses().items()}
+    targets = {n: Target.from_transform(T) for n, T in solver.effector_poses().items()}
     pose = Pose("biped", "left_foot", tuple(W[:3, 3]), tuple(quaternion_from_matrix(W[:3, :3])),
                 dict(zip(skeleton.dof_names, solver.q.tolist())), targets)
     read = pose_from_yaml(pose_to_yaml(pose), skeleton).pose
@@ -291,12 +292,12 @@ def test_pose_is_immutable(pose):
 
 
 def test_pose_rejects_bad_values():
-    with pytest.raises(gsik.PoseError):
-        TargetPose((0.0, float("nan"), 0.0))
-    with pytest.raises(gsik.PoseError):
-        TargetPose((0.0, 0.0, 0.0), (2.0, 0.0, 0.0, 0.0))
-    with pytest.raises(gsik.PoseError):
-        TargetPose((0.0, 0.0, 0.0), weight=-1.0)
+    with pytest.raises(gsik.TargetError):
+        Target((0.0, float("nan"), 0.0))
+    with pytest.raises(gsik.TargetError):
+        Target((0.0, 0.0, 0.0), (2.0, 0.0, 0.0, 0.0))
+    with pytest.raises(gsik.TargetError):
+        Target((0.0, 0.0, 0.0), weight=-1.0)
     with pytest.raises(gsik.PoseError):
         Pose("biped", "right_foot", (0, 0, 0), (1, 0, 0, 0), {"waist.x": float("inf")}, {})
 

@@ -1,0 +1,139 @@
+"""The window's file commands: new, open, save, save as, the unsaved-changes question, recent files."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+
+from PySide6 import QtCore, QtWidgets
+
+import gsik
+from gsik_studio.model import Document
+
+POSE_FILTER = "gsik poses (*.yaml *.yml);;All files (*)"
+MAX_RECENT = 8
+
+
+class FileActions:
+    """File commands with their dialogs and messages, for one document.
+
+    Args:
+        parent: The window (dialogs are its children).
+        doc: The document.
+        settings: Where the recent files are remembered (``recent_files``).
+        show_message: ``(text, milliseconds)`` on the status bar.
+        stop_playback: Ends a running playback before the document is replaced.
+        opened: Called after a file was opened (the window frames the character).
+    """
+
+    def __init__(self, parent: QtWidgets.QWidget, doc: Document, settings: QtCore.QSettings,
+                 show_message: Callable[[str, int], None], stop_playback: Callable[[], None],
+                 opened: Callable[[], None]):
+        self.parent, self.doc, self.settings = parent, doc, settings
+        self._message, self._stop_playback, self._opened = show_message, stop_playback, opened
+        self.recent_menu = QtWidgets.QMenu("Open &Recent", parent)
+        self.update_recent_menu()
+
+    def confirm_discard(self, action: str) -> bool:
+        """Ask before ``action`` throws away unsaved changes; True to go on."""
+        if not self.doc.dirty:
+            return True
+        box = QtWidgets.QMessageBox
+        answer = box.question(self.parent, "Unsaved changes", f"The pose “{self.doc.title}” has unsaved changes.\n\n"
+                              f"Save them before you {action}?", box.Save | box.Discard | box.Cancel, box.Save)
+        if answer == box.Save:
+            return self.save()
+        return answer == box.Discard
+
+    def start_dir(self) -> str:
+        """Where file dialogs open: the current file's folder, else the last recent file's, else home."""
+        if self.doc.path:
+            return os.path.dirname(self.doc.path)
+        recent = self.recent_files()
+        return os.path.dirname(recent[0]) if recent else os.path.expanduser("~")
+
+    def new_pose(self) -> None:
+        if self.confirm_discard("start a new pose"):
+            self._stop_playback()
+            self.doc.new()
+
+    def open_dialog(self) -> bool:
+        if not self.confirm_discard("open another pose"):
+            return False
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(self.parent, "Open pose", self.start_dir(), POSE_FILTER)
+        if not path:
+            return False
+        return self.open_path(path, confirm=False)
+
+    def open_path(self, path: str, confirm: bool = True) -> bool:
+        """Open a pose file; on error show it and keep the current pose. True on success."""
+        if confirm and not self.confirm_discard("open another pose"):
+            return False
+        self._stop_playback()
+        try:
+            warnings = self.doc.open(path)
+        except gsik.GsikError as exc:
+            return self._failed(f"Could not open {os.path.basename(path)}: {exc}", "Could not open pose",
+                                f"The pose file could not be opened; nothing was changed.\n\n{exc}")
+        self.add_recent(path)
+        if warnings:
+            self._message(f"Opened {os.path.basename(path)} with {len(warnings)} warning(s)", 10000)
+            QtWidgets.QMessageBox.warning(self.parent, "Pose opened with warnings",
+                                          "The pose was opened, with these repairs:\n\n" + "\n".join(warnings))
+        else:
+            self._message(f"Opened {path}", 5000)
+        self._opened()
+        return True
+
+    def save(self) -> bool:
+        if not self.doc.path:
+            return self.save_as()
+        return self.save_to(self.doc.path)
+
+    def save_as(self) -> bool:
+        start = self.doc.path or os.path.join(self.start_dir(), "pose.yaml")
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self.parent, "Save pose", start, POSE_FILTER)
+        if not path:
+            return False
+        if not os.path.splitext(path)[1]:
+            path += ".yaml"
+        return self.save_to(path)
+
+    def save_to(self, path: str) -> bool:
+        """Save atomically; on error show it (an existing file is left untouched). True on success."""
+        try:
+            self.doc.save(path)
+        except gsik.GsikError as exc:
+            return self._failed(f"Could not save: {exc}", "Could not save pose",
+                                f"The pose was not saved (any existing file is unchanged).\n\n{exc}")
+        self.add_recent(path)
+        self._message(f"Saved {path}", 5000)
+        return True
+
+    def _failed(self, status: str, title: str, text: str) -> bool:
+        """Say why a file command failed, on the status bar and in a box; returns False."""
+        self._message(status, 10000)
+        QtWidgets.QMessageBox.critical(self.parent, title, text)
+        return False
+
+    def recent_files(self) -> list[str]:
+        value = self.settings.value("recent_files", [])
+        if isinstance(value, str):
+            value = [value]
+        return [str(v) for v in (value or [])]
+
+    def add_recent(self, path: str) -> None:
+        path = os.path.abspath(path)
+        files = [p for p in self.recent_files() if p != path]
+        files.insert(0, path)
+        self.settings.setValue("recent_files", files[:MAX_RECENT])
+        self.update_recent_menu()
+
+    def update_recent_menu(self) -> None:
+        self.recent_menu.clear()
+        files = self.recent_files()
+        for i, p in enumerate(files, start=1):
+            a = self.recent_menu.addAction(f"&{i} {os.path.basename(p)}")
+            a.setToolTip(p)
+            a.triggered.connect(lambda _c=False, path=p: self.open_path(path))
+        self.recent_menu.setEnabled(bool(files))

@@ -1,0 +1,365 @@
+"""The main window of gsik-studio: the assembly of viewport, panels, actions, file commands and read-outs.
+
+The window owns a :class:`gsik_studio.model.Document`, the :class:`gsik_studio.model.FrameLoop`
+that steps it and a :class:`gsik_studio.viewport.Viewport` that draws it. Each
+panel binds itself to the document's typed events and shows values inside
+signal blockers, so that showing a value never writes it back.
+
+Two ``QTimer`` drive the frame loop: ``timer`` steps the solver once per
+frame while the targets and the pose disagree (it stops when the solver
+reports converged or best reach), ``play_timer`` shows playback frames.
+"""
+
+from __future__ import annotations
+
+import os
+
+from PySide6 import QtCore, QtGui, QtWidgets
+from PySide6.QtCore import Qt
+
+import gsik
+from gsik_studio import animations
+from gsik_studio.actions import VIEW_KEYS, make_actions, make_menus, make_toolbar
+from gsik_studio.files import FileActions
+from gsik_studio.model import Document, FrameLoop, Playback
+from gsik_studio.qt_compat import protect_none
+from gsik_studio.widgets import nice
+from gsik_studio.widgets.effectors import EffectorsPanel
+from gsik_studio.widgets.selected import SelectedTargetPanel
+from gsik_studio.widgets.solver_panel import solver_panel
+from gsik_studio.widgets.status import StatusReadouts
+
+FRAME_INTERVAL_MS = 16  # ~60 Hz
+
+
+class MainWindow(QtWidgets.QMainWindow):
+    """The gsik-studio window.
+
+    Args:
+        doc: The document to show (default: the bundled biped, standing).
+        settings: Where geometry, recent files and solver settings are
+            remembered (default: the user's ``QSettings("gsik", "gsik-studio")``).
+        run_timers: False leaves driving :attr:`loop` to the caller (the app benchmark calls
+            ``loop.solve_frame()`` itself); the solver timer then never starts.
+    """
+
+    def __init__(self, doc: Document | None = None, settings: QtCore.QSettings | None = None,
+                 parent: QtWidgets.QWidget | None = None, run_timers: bool = True):
+        protect_none()  # PySide6 6.12 on Python 3.11 (see gsik_studio.qt_compat)
+        super().__init__(parent)
+        import pyvista as pv
+        from pyvistaqt import QtInteractor
+
+        from gsik_studio.viewport import Viewport
+
+        pv.global_theme.multi_samples = 0  # software GL: multisampling costs 3-5x
+        self.settings = settings if settings is not None else QtCore.QSettings("gsik", "gsik-studio")
+        self.doc = doc if doc is not None else Document()
+        self.loop = FrameLoop(self.doc)
+        self.run_timers = run_timers
+
+        self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
+        self.plotter.installEventFilter(self)  # VTK's own key bindings ('e', 'q', 'w', ...) are not wanted
+        self.setCentralWidget(self.plotter)
+        self.viewport = Viewport(self.plotter, self.doc)
+        self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
+                                 self._show_opened)
+        self._make_actions()
+        self._make_panel()
+        self.status = StatusReadouts(self.statusBar(), self.doc, self.loop)
+        self.timer = QtCore.QTimer(self)
+        self.timer.setInterval(FRAME_INTERVAL_MS)
+        self.timer.timeout.connect(self.tick)
+        self.play_timer = QtCore.QTimer(self)
+        self.play_timer.timeout.connect(self._play_tick)
+        self._connect()
+        self._restore_geometry()
+
+        for _ in range(2):  # compiles / loads the numba kernels now, not on the first drag
+            self.doc.step()
+        self.viewport.select("left_hand" if "left_hand" in self.doc.targets else None)
+        self._show_all()
+        self.loop.wake()
+
+    # -- assembly -----------------------------------------------------------------------
+    def _make_actions(self) -> None:
+        self.scenario_menu = animations.scenario_menu(self, self.doc.skeleton, self.play_scenario)
+        actions = make_actions(self)
+        for name, action in actions.items():  # act_open, act_undo, ... (the names of actions.ACTIONS)
+            setattr(self, f"act_{name}", action)
+        self.act_views = {n: actions[f"view_{n}"] for n, _ in VIEW_KEYS}
+        self.act_scenarios = self.scenario_menu.menuAction()
+        menus = {"recent": self.files.recent_menu, "scenarios": self.scenario_menu}
+        make_menus(self, actions, menus)
+        self.toolbar = make_toolbar(self, actions, menus)
+
+    def _make_panel(self) -> None:
+        panel = QtWidgets.QWidget()
+        layout = QtWidgets.QVBoxLayout(panel)
+        layout.setContentsMargins(8, 8, 8, 8)
+        layout.setSpacing(10)
+        self.effectors = EffectorsPanel(self.doc, self.viewport.select)
+        self.selected = SelectedTargetPanel(self.doc, lambda: self.viewport.selected)
+        self.solver_panel = solver_panel(self.doc, self.settings)
+        self.solver_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
+        self.solver_panel.restore()
+        for box in (self.effectors, self.selected, self.solver_panel):
+            layout.addWidget(box)
+        layout.addStretch(1)
+        scroll = QtWidgets.QScrollArea()
+        scroll.setWidget(panel)
+        scroll.setWidgetResizable(True)
+        scroll.setFrameShape(QtWidgets.QFrame.NoFrame)
+        dock = QtWidgets.QDockWidget("Pose", self)
+        dock.setObjectName("pose_panel")
+        dock.setWidget(scroll)
+        dock.setFeatures(QtWidgets.QDockWidget.DockWidgetMovable | QtWidgets.QDockWidget.DockWidgetFloatable)
+        dock.setMinimumWidth(440)
+        self.addDockWidget(Qt.RightDockWidgetArea, dock)
+
+    def _connect(self) -> None:
+        ev = self.doc.events
+        ev.pose.connect(self._show_root)
+        for signal in (ev.pose, ev.targets, ev.options):
+            signal.connect(self._show_targets)
+        ev.history.connect(self._show_history)
+        ev.file.connect(self._show_title)
+        self.loop.events.wake.connect(self._start_timer)
+        self.loop.events.frame.connect(self._show_frame)
+        self.loop.events.readouts.connect(self.effectors.show_errors)
+        self.loop.events.message.connect(lambda text: self.statusBar().showMessage(text, 8000))
+        self.viewport.selection_changed.connect(self._show_selection)
+        self.viewport.drag_finished.connect(lambda _name: self._show_history())
+
+    def _restore_geometry(self) -> None:
+        self.resize(1440, 900)
+        geometry = self.settings.value("window/geometry")
+        if isinstance(geometry, (QtCore.QByteArray, bytes)):
+            self.restoreGeometry(geometry)
+        state = self.settings.value("window/state")
+        if isinstance(state, (QtCore.QByteArray, bytes)):
+            self.restoreState(state)
+
+    # -- for tests and scripts ------------------------------------------------------------
+    @property
+    def rows(self):
+        """The effectors panel's rows, ``{effector: EffectorRow}``."""
+        return self.effectors.rows
+
+    @property
+    def rotate_buttons(self):
+        return self.selected.rotate_buttons
+
+    @property
+    def status_labels(self) -> dict[str, QtWidgets.QLabel]:
+        return self.status.labels
+
+    @property
+    def sweeps(self) -> QtWidgets.QSpinBox:
+        """The solver panel's sweeps editor."""
+        return self.solver_panel.editors["sweeps"]
+
+    @property
+    def paused(self) -> bool:
+        return self.loop.paused
+
+    @property
+    def playback(self) -> Playback | None:
+        return self.loop.playback
+
+    def recent_files(self) -> list[str]:
+        return self.files.recent_files()
+
+    def open_path(self, path: str, confirm: bool = True) -> bool:
+        return self.files.open_path(path, confirm)
+
+    def save_to(self, path: str) -> bool:
+        return self.files.save_to(path)
+
+    # -- keep VTK's key bindings out -------------------------------------------------
+    def eventFilter(self, obj, event):  # noqa: N802 (Qt's name)
+        if obj is self.plotter and event.type() in (QtCore.QEvent.KeyPress, QtCore.QEvent.KeyRelease):
+            return True
+        return super().eventFilter(obj, event)
+
+    # -- the frame loop's clock -------------------------------------------------------------
+    def _start_timer(self) -> None:
+        if self.run_timers and not self.timer.isActive():
+            self.timer.start()
+
+    def tick(self) -> None:
+        """One solver frame (the timer's slot); the timer stops when the pose is settled."""
+        if not self.loop.solve_frame():
+            self.timer.stop()
+
+    def _show_frame(self) -> None:
+        self.viewport.refresh()
+        self.viewport.render()
+
+    # -- document -> widgets ----------------------------------------------------------------
+    def _show_targets(self) -> None:
+        self.viewport.sync_targets()
+        if not self.timer.isActive():  # otherwise the next tick redraws
+            self._show_frame()
+
+    def _show_root(self) -> None:
+        root = self.doc.root
+        for a, name in ((self.act_root_left, "left_foot"), (self.act_root_right, "right_foot")):
+            with QtCore.QSignalBlocker(a):
+                a.setChecked(root == name)
+
+    def _show_history(self) -> None:
+        h = self.doc.history
+        self.act_undo.setEnabled(h.can_undo)
+        self.act_redo.setEnabled(h.can_redo)
+        self.act_undo.setText(f"&Undo {h.undo_text}" if h.can_undo else "&Undo")
+        self.act_redo.setText(f"&Redo {h.redo_text}" if h.can_redo else "&Redo")
+        self.act_undo.setIconText("Undo")
+        self.act_redo.setIconText("Redo")
+
+    def _show_title(self) -> None:
+        self.setWindowTitle(f"{self.doc.title}[*] — gsik studio")
+        self.setWindowModified(self.doc.dirty)
+
+    def _show_selection(self, name: str | None) -> None:
+        self.effectors.show_selection(name)
+        self.selected.show_selection(name)
+        self.viewport.render()
+
+    def _show_all(self) -> None:
+        self._show_root()
+        self.status.show_root()
+        self._show_history()
+        self._show_title()
+        self._show_selection(self.viewport.selected)
+        self.loop.readouts_now()
+
+    def _show_opened(self) -> None:
+        self.viewport.frame_all()
+        self.viewport.render()
+
+    # -- commands -----------------------------------------------------------------------------
+    def set_root(self, name: str) -> None:
+        self.doc.set_root(name)
+        self.statusBar().showMessage(f"IK root is now the {nice(name)}; the pose stays where it is", 4000)
+
+    def set_paused(self, paused: bool) -> None:
+        with QtCore.QSignalBlocker(self.act_pause):
+            self.act_pause.setChecked(bool(paused))
+        self.act_pause.setText("Resume" if paused else "Pause")
+        self.act_pause.setIcon(self.style().standardIcon(
+            QtWidgets.QStyle.SP_MediaPlay if paused else QtWidgets.QStyle.SP_MediaPause))
+        if paused:
+            self.timer.stop()
+        self.loop.set_paused(paused)
+
+    def set_view(self, name: str) -> None:
+        self.viewport.set_view(name)
+        self.viewport.render()
+
+    def undo(self) -> None:
+        if self.doc.undo():
+            self.statusBar().showMessage(f"Undone: {self.doc.history.redo_text}", 3000)
+
+    def redo(self) -> None:
+        if self.doc.redo():
+            self.statusBar().showMessage(f"Redone: {self.doc.history.undo_text}", 3000)
+
+    # -- playback -----------------------------------------------------------------------------
+    def play(self, frames, text: str = "Play", frame_time: float = 1 / 30) -> Playback:
+        """Play a :class:`gsik.anim.motion.Motion` or a sequence of target dicts in the view."""
+        self.stop_playback()
+        pb = self.loop.play(frames, text, frame_time)
+        self.timer.stop()
+        self.play_timer.setInterval(max(1, int(round(pb.frame_time * 1000))))
+        self.play_timer.start()
+        return pb
+
+    def play_walk(self, n_steps: int = 4) -> Playback | None:
+        """Solve a walk with :func:`gsik.anim.gait.walk` from the standing pose and play it."""
+        from gsik.anim import gait
+
+        QtWidgets.QApplication.setOverrideCursor(Qt.WaitCursor)
+        try:
+            result = gait.walk(self.doc.skeleton, gait.WalkParameters(n_steps=n_steps))
+        except gsik.GsikError as exc:
+            self.statusBar().showMessage(f"Could not make a walk: {exc}", 8000)
+            return None
+        finally:
+            QtWidgets.QApplication.restoreOverrideCursor()
+        self.statusBar().showMessage(f"Walking: {result.motion.n_frames} frames, root swapping at every step", 5000)
+        return self.play(result.motion, "Walk")
+
+    def play_scenario(self, name: str) -> Playback | None:
+        """Load a built-in scenario: the rest pose with its targets, settled live; an animated one plays first."""
+        try:
+            sc, first = animations.scenario_start(self.doc.skeleton, name)
+        except gsik.GsikError as exc:
+            self.statusBar().showMessage(f"Could not load scenario {name}: {exc}", 8000)
+            return None
+        self.stop_playback()
+        self.doc.set_pose(first, f"Scenario {nice(name)}")
+        self.viewport.frame_all()
+        self.statusBar().showMessage(f"Scenario {nice(name)}: {sc.description}", 8000)
+        if sc.n_frames > 1:
+            return self.play(animations.scenario_frames(sc), f"Scenario {nice(name)} (animated)", sc.frame_time)
+        return None
+
+    def _play_tick(self) -> None:
+        if not self.loop.play_frame():
+            self._playback_ended()
+
+    def _playback_ended(self) -> None:
+        self.play_timer.stop()
+        self.viewport.frame_all()
+        self.viewport.render()
+
+    def stop_playback(self) -> None:
+        """End a running playback here (it stays, as one undo step)."""
+        if self.play_timer.isActive():
+            self.loop.stop_playback()
+            self._playback_ended()
+
+    # -- pictures -------------------------------------------------------------------------------
+    def grab_window(self) -> QtGui.QImage:
+        """A picture of the whole window, the 3D view freshly rendered."""
+        self.viewport.refresh()
+        self.plotter.render()
+        QtWidgets.QApplication.processEvents()
+        return self.grab().toImage()
+
+    def screenshot_dialog(self) -> None:
+        start = os.path.join(self.files.start_dir(), "gsik-studio.png")
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save screenshot", start, "PNG images (*.png)")
+        if path:
+            self.save_screenshot(path)
+
+    def save_screenshot(self, path: str) -> bool:
+        ok = self.grab_window().save(path)
+        if ok:
+            self.statusBar().showMessage(f"Saved screenshot {path}", 5000)
+        else:
+            QtWidgets.QMessageBox.critical(self, "Could not save screenshot", f"Could not write {path}")
+        return ok
+
+    def settle(self, max_frames: int = 400) -> gsik.SolveResult | None:
+        """Step the solver until it idles (for scripted pictures), then redraw."""
+        for _ in range(max_frames):
+            if not self.doc.needs_solving:
+                break
+            self.doc.step()
+        self.viewport.refresh()
+        self.loop.readouts_now()
+        return self.doc.last_result
+
+    def closeEvent(self, event: QtGui.QCloseEvent) -> None:  # noqa: N802 (Qt's name)
+        if not self.files.confirm_discard("quit"):
+            event.ignore()
+            return
+        self.timer.stop()
+        self.play_timer.stop()
+        self.settings.setValue("window/geometry", self.saveGeometry())
+        self.settings.setValue("window/state", self.saveState())
+        self.settings.sync()
+        self.plotter.close()
+        event.accept()

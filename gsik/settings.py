@@ -1,0 +1,122 @@
+"""Solver settings: every field checked once, when the settings are made."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from types import MappingProxyType
+
+import numpy as np
+
+from gsik.errors import SolverError
+from gsik.kernels import KernelSettings
+
+
+#: The settings that turn the defaults into the paper's plain method: fixed delta, PGS sweeps only,
+#: no step limit, no adaptive damping, no settling, no subspace minimisation.
+PAPER_METHOD = MappingProxyType(dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0,
+                                     settle_tolerance=0.0))
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Solver settings; every field is checked when the settings are made.
+
+    Attributes:
+        damping: delta, added to the diagonal of ``J^T W J`` (paper: 0.001).
+        sweeps: Gauss-Seidel sweeps per step (test 1, the iteration limit).
+        residual_tolerance: Stop sweeping when the projected ``|Ax - b|`` is
+            below this (test 2); 0 disables.
+        update_tolerance: Stop sweeping when a sweep changes ``dq`` by less
+            than this [rad] (test 3); 0 disables.
+        stall_tolerance: Stop sweeping when ``dq`` equals the previous
+            frame's within this [rad] (test 4); 0 disables. Also the step size
+            [rad] below which a pose counts as no longer changing.
+        max_step: Largest change of any one angle in one step [rad]; 0 for none.
+        adaptive_damping: Halve or refuse a step that raises the error and
+            raise the damping (Levenberg-Marquardt); while steps succeed the
+            damping falls, down to ``damping / 10``. Off gives the paper's
+            plain fixed-delta method.
+        settle_tolerance: With adaptive damping, a step that lowers the
+            weighted error by less than this fraction is not taken: the pose
+            is held as the best reach instead of creeping (also ends
+            :meth:`Solver.solve` attempts). 0 disables.
+        subspace_minimization: After the PGS sweeps, solve the unknowns that
+            are not on a limit exactly (Cholesky) and project: each step
+            then solves its linear system exactly, where the paper's few
+            sweeps solve it roughly. Off is the paper's method.
+        warm_start: Start each frame's sweeps from the previous frame's ``dq``.
+        orientation_weight: Weight of orientation rows relative to position
+            rows [m/rad].
+        position_tolerance: Converged when every position error is below this [m].
+        orientation_tolerance: ... and every orientation error below this [rad].
+        max_iterations: Linearisations per attempt in :meth:`Solver.solve`.
+        solve_sweeps: Gauss-Seidel sweeps per linearisation in :meth:`Solver.solve`.
+        restarts: Further attempts :meth:`Solver.solve` makes when the first
+            one does not converge (a continuation, then random restarts).
+        seed: Seed of the random restarts, so solves are repeatable.
+
+    :meth:`paper` gives the paper's plain method.
+    """
+
+    damping: float = 1e-3
+    sweeps: int = 10
+    residual_tolerance: float = 1e-10
+    update_tolerance: float = 1e-10
+    stall_tolerance: float = 1e-9
+    max_step: float = 0.25
+    adaptive_damping: bool = True
+    settle_tolerance: float = 1e-6
+    subspace_minimization: bool = True
+    warm_start: bool = True
+    orientation_weight: float = 0.5
+    position_tolerance: float = 1e-4
+    orientation_tolerance: float = 1e-3
+    max_iterations: int = 200
+    solve_sweeps: int = 5
+    restarts: int = 20
+    seed: int = 0
+
+    def __post_init__(self):
+        for f in fields(self):
+            _check_setting(f.name, f.type, getattr(self, f.name))
+        for name in ("sweeps", "max_iterations", "solve_sweeps"):
+            if getattr(self, name) < 1:
+                raise SolverError(f"setting {name} must be at least 1, got {getattr(self, name)!r}")
+        if self.damping <= 0:
+            raise SolverError(f"setting damping must be > 0 (it keeps J^T W J + delta I invertible), got {self.damping!r}")
+
+    @classmethod
+    def paper(cls, **overrides) -> SolverSettings:
+        """Kenwright's plain method (:data:`PAPER_METHOD`): fixed delta, PGS sweeps only, no safeguards."""
+        return cls(**{**PAPER_METHOD, **overrides})
+
+    def kernel_settings(self, sweeps: int | None = None) -> KernelSettings:
+        """The settings the kernels read; ``sweeps`` overrides :attr:`sweeps` (a solve uses :attr:`solve_sweeps`)."""
+        return KernelSettings(
+            damping=float(self.damping), sweeps=int(self.sweeps if sweeps is None else sweeps),
+            residual_tolerance=float(self.residual_tolerance), update_tolerance=float(self.update_tolerance),
+            stall_tolerance=float(self.stall_tolerance), max_step=float(self.max_step),
+            adaptive_damping=bool(self.adaptive_damping), warm_start=bool(self.warm_start),
+            position_tolerance=float(self.position_tolerance), orientation_tolerance=float(self.orientation_tolerance),
+            settle_tolerance=float(self.settle_tolerance), subspace_minimization=bool(self.subspace_minimization),
+        )
+
+
+def _check_setting(name: str, kind: str, v) -> None:
+    """One field: a bool, or a finite number >= 0 (whole for an int)."""
+    if kind == "bool":
+        if not isinstance(v, (bool, np.bool_)):
+            raise SolverError(f"setting {name} must be True or False, got {v!r}")
+        return
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+        raise SolverError(f"setting {name} must be a number, got {v!r}")
+    if not math.isfinite(v) or v < 0:
+        raise SolverError(f"setting {name} must be finite and >= 0, got {v!r}")
+    if kind == "int" and int(v) != v:
+        raise SolverError(f"setting {name} must be a whole number, got {v!r}")
+
+
+def setting_names() -> tuple[str, ...]:
+    """Names of every solver setting."""
+    return tuple(f.name for f in fields(SolverSettings))
