@@ -19,6 +19,7 @@ import numpy as np
 from gsik import kernels
 from gsik.errors import SolverError, TargetError, choices
 from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
+from gsik.kernels import solve as solve_kernels
 from gsik.kernels import step as step_kernels
 from gsik.kernels.kinematics import forward_kinematics
 from gsik.kinematics import Topology, kinematic_model, topology
@@ -46,6 +47,11 @@ class Status(enum.IntEnum):
         return self.name.lower().replace("_", " ")
 
 
+#: Attempts ending with weighted errors this close (relative) found the same best reach ...
+SETTLED_AGREEMENT = 1e-3
+#: ... and this many further attempts finding it again settle it: the solve stops.
+SETTLED_REPEATS = 2
+
 _STATUSES = tuple(Status)  # by code: a tuple index costs less than Status(code)
 
 
@@ -55,8 +61,9 @@ class SolveResult(NamedTuple):
     Attributes:
         q: Joint angles (n_dofs,) [rad] after the call.
         status: :class:`Status`.
-        iterations: Gauss-Seidel sweeps of a step; linearisations of a solve.
-        sweeps: Gauss-Seidel sweeps in all.
+        iterations: Gauss-Seidel sweeps of a step; linearisations of a solve,
+            all its attempts together.
+        sweeps: Gauss-Seidel sweeps in all (of all attempts).
         residual: Projected ``|Ax - b|`` of the last sweep (a step), or the
             weighted squared error ``0.5 e^T W e`` (a solve).
         effector_names: (m,) effectors, in the order of the error arrays.
@@ -64,7 +71,8 @@ class SolveResult(NamedTuple):
         orientation_errors: (m,) angle to each target orientation [rad] (0
             where the orientation is not used).
         step_norm: Size of the last change of ``q`` [rad].
-        attempts: Attempts :meth:`Solver.solve` made (1 for a step).
+        attempts: Attempts :meth:`Solver.solve` made (1 for a step; 1 with
+            no work when it starts from a settled best reach).
     """
 
     q: np.ndarray
@@ -143,6 +151,8 @@ class Solver:
             world_from_root = transform(R[f], p[f])
         self._W = self._check_world_from_root(world_from_root)
         self._targets: dict[str, Target] = {}
+        self._settled = None  # (what a solve depended on, its statistics) after a solve ended at a best reach
+        self._work_done = np.zeros(2, dtype=np.int64)  # linearisations and sweeps of the current solve
         self._set_topology(skeleton.root, q, self._settings.damping)
 
     # -- construction helpers -------------------------------------------------
@@ -353,26 +363,45 @@ class Solver:
     def solve(self, targets: Mapping[str, Target | None] | None = None, q0=None) -> SolveResult:
         """Solve to convergence (or best reach) from ``q0`` (default: the current angles).
 
-        Levenberg-Marquardt over PGS steps (:func:`gsik.kernels.step.solve`). If
-        that does not converge, up to ``settings.restarts`` more attempts:
-        first a continuation (the targets approached in stages from the
-        current effector poses), then random restarts inside the limits.
-        The best attempt (lowest weighted error) is kept and becomes the
-        solver's state.
+        One attempt (:func:`gsik.kernels.solve.solve`: Levenberg-Marquardt over
+        bounded steps, positions first). If it does not converge, up to
+        ``settings.restarts`` more: first a continuation (the targets
+        approached in stages from the current effector poses), then random
+        restarts inside the limits. The best attempt (lowest weighted error)
+        is kept and becomes the solver's state. The attempts stop early once
+        the best reach is settled: when an attempt ends where the best one
+        did (the same error within :data:`SETTLED_AGREEMENT`), and at once
+        when a solve starts from the best reach a previous solve settled on,
+        with the same targets and settings. The result counts the
+        linearisations (``iterations``) and sweeps of all attempts.
         """
         if targets is not None:
             self.set_targets(targets)
         if q0 is not None:
             self.set_q(q0)
+        key = self._reach_key()
+        if self._settled is not None and self._settled[0] == key:
+            return self._result(self._settled[1], O_COST, 1)  # nothing further can do better: no work
         s = self._settings
         start = self._q.copy()
+        self._work_done[:] = 0
         stats = self._solve_from(start)
         attempts = 1
         if stats[O_STATUS] != Status.CONVERGED and s.restarts > 0:
             stats, attempts = self._restart(start, stats)
+        stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
         self._ws.x[:] = 0.0
         self._ws.lam[0] = s.damping
+        settled = stats.copy()
+        settled[O_ITERATIONS] = settled[O_SWEEPS] = 0
+        self._settled = (self._reach_key(), settled) if stats[O_STATUS] == Status.STALLED else None
         return self._result(stats, O_COST, attempts)
+
+    def _reach_key(self) -> tuple:
+        """What a solve's outcome depends on: settings, root and its pose, targets, start angles."""
+        t = self._packed
+        return (self._settings, self._topo.root_frame, self._W.tobytes(), t.position.tobytes(),
+                t.rotation.tobytes(), t.row_weight.tobytes(), self._q.tobytes())
 
     def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
         """Further attempts after a failed first one; leaves the best attempt as the state."""
@@ -381,6 +410,7 @@ class Solver:
         best = (stats[O_COST], self._q.copy(), stats)
         rng = np.random.default_rng(s.seed)
         attempts = 1
+        repeats = 0
         while stats[O_STATUS] != Status.CONVERGED and attempts <= s.restarts:
             if attempts == 1:
                 stats = self._solve_by_continuation(start)
@@ -389,21 +419,27 @@ class Solver:
                 alpha = min(1.0, 0.25 * attempts)
                 stats = self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
             attempts += 1
+            agrees = abs(stats[O_COST] - best[0]) <= SETTLED_AGREEMENT * best[0]
             if stats[O_STATUS] == Status.CONVERGED or stats[O_COST] < best[0]:
                 best = (stats[O_COST], self._q.copy(), stats)
+            repeats += agrees and stats[O_STATUS] != Status.CONVERGED
+            if repeats >= SETTLED_REPEATS:
+                break  # attempts from other starts keep finding the same best reach: the best there is to find
         if best[2] is not stats:
             # An earlier attempt was best: make it the state again (frames and errors included).
             self._solve_from(best[1], iterations=0)
         return best[2], attempts
 
     def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
-        """One Levenberg-Marquardt attempt from ``q0``; returns a copy of its statistics."""
+        """One attempt from ``q0``; returns a copy of its statistics and adds its work to ``_work_done``."""
         s = self._settings
         self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
-        step_kernels.solve(self._model, s.kernel_settings(sweeps=s.solve_sweeps), self._packed,
-                           self._topo.root_frame, self._W, self._q, s.max_iterations if iterations is None else iterations,
-                           self._ws)
-        return self._ws.stats.copy()
+        solve_kernels.solve(self._model, s.kernel_settings(for_solve=True), self._packed,
+                            self._topo.root_frame, self._W, self._q,
+                            s.max_iterations if iterations is None else iterations, self._ws)
+        stats = self._ws.stats.copy()
+        self._work_done += stats[[O_ITERATIONS, O_SWEEPS]].astype(np.int64)
+        return stats
 
     def _solve_by_continuation(self, q0: np.ndarray, stages: int = 4) -> np.ndarray:
         """Approach the targets in ``stages`` from where the effectors are at ``q0``."""
@@ -413,19 +449,16 @@ class Solver:
         self._refresh_frames()
         start_p = self._ws.p[self._topo.effector_frame].copy()
         start_R = self._ws.R[self._topo.effector_frame].copy()
-        sweeps_total = 0
         try:
             for k in range(1, stages):
                 a = k / stages
                 for i in range(len(final_p)):
                     tp[i] = (1 - a) * start_p[i] + a * final_p[i]
                     tR[i] = matrix_from_rotvec(a * rotvec_from_matrix(final_R[i] @ start_R[i].T)) @ start_R[i]
-                sweeps_total += self._solve_from(self._q.copy())[O_SWEEPS]
+                self._solve_from(self._q.copy())
         finally:
             tp[:], tR[:] = final_p, final_R
-        stats = self._solve_from(self._q.copy())
-        stats[O_SWEEPS] += sweeps_total
-        return stats
+        return self._solve_from(self._q.copy())
 
     def set_root(self, name: str) -> None:
         """Make the joint or site ``name`` the IK root; the pose does not move.
