@@ -99,13 +99,13 @@ def test_paper_solve_is_the_paper_step_repeated(biped, rng):
 # were silently ignored, bit-identical results on or off).
 SOLVE_SETTINGS = [
     ({}, "adaptive_damping", False), ({}, "subspace_minimization", False), ({}, "positions_first", False),
-    ({}, "solve_max_step", 0.05), ({}, "warm_start", False), ({}, "settle_tolerance", 1e-2),
+    ({}, "solve_max_step", 0.05), ({}, "warm_start", False), ({"restarts": 0}, "settle_tolerance", 0.3),
     ({}, "damping", 0.3), ({}, "orientation_weight", 2.0), ({}, "max_iterations", 3),
     ({"subspace_minimization": False}, "solve_sweeps", 1),
     ({"subspace_minimization": False, "solve_sweeps": 30}, "residual_tolerance", 1e-2),
     ({"subspace_minimization": False, "solve_sweeps": 30}, "update_tolerance", 1e-2),
     ({"subspace_minimization": False, "solve_sweeps": 30}, "stall_tolerance", 1e-1),
-    ({"max_iterations": 20}, "restarts", 0), ({"max_iterations": 20}, "seed", 7),
+    ({"max_iterations": 4}, "restarts", 0), ({"max_iterations": 4}, "seed", 7),
 ]
 
 
