@@ -50,7 +50,7 @@ class Status(enum.IntEnum):
 #: Attempts ending with weighted errors this close (relative) found the same best reach ...
 SETTLED_AGREEMENT = 1e-3
 #: ... and this many further attempts finding it again settle it: the solve stops.
-SETTLED_REPEATS = 2
+SETTLED_REPEATS = 8
 
 _STATUSES = tuple(Status)  # by code: a tuple index costs less than Status(code)
 
