@@ -108,7 +108,7 @@ def dls_first_attempt(skeleton, sets, damping: float = 0.03, iterations: int = 1
         for _ in range(iterations + 1):
             poses = skeleton.effector_poses(q, W)
             e = np.concatenate([np.concatenate([targets[n].position - poses[n][:3, 3],
-                                                rotvec_from_matrix(targets[n].orientation @ poses[n][:3, :3].T)])
+                                                rotvec_from_matrix(targets[n].rotation @ poses[n][:3, :3].T)])
                                 for n in names])
             pos, ori = e.reshape(-1, 6)[:, :3], e.reshape(-1, 6)[:, 3:]
             good = np.linalg.norm(pos, axis=1).max() < POSITION_OK and np.linalg.norm(ori, axis=1).max() < ORIENTATION_OK

@@ -10,10 +10,8 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from gsik._jit import njit
-from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS,
+from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, make_scratch)
 from gsik.kernels.kinematics import effector_errors, frames_into, linear_system
 from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
