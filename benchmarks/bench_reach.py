@@ -75,8 +75,7 @@ def held_unreachable(skeleton, calls: int = 30) -> dict:
         results.append(solver.solve(targets))
         times.append((time.perf_counter_ns() - t) / 1e6)
     last = results[-1]
-    return dict(median_ms=float(np.median(times)), status=str(last.status.value if hasattr(last.status, "value")
-                                                                else last.status),
+    return dict(median_ms=float(np.median(times)), status=last.status.label,
                 attempts=int(last.attempts), iterations=int(last.iterations), sweeps=int(last.sweeps),
                 nan=bool(not all(np.all(np.isfinite(r.q)) for r in results)),
                 hand_error_m=float(last.errors()["left_hand"][0]))

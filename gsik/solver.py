@@ -379,8 +379,7 @@ class Solver:
             self.set_targets(targets)
         if q0 is not None:
             self.set_q(q0)
-        key = self._reach_key()
-        if self._settled is not None and self._settled[0] == key:
+        if self._settled is not None and self._settled[0] == self._reach_key():
             return self._result(self._settled[1], O_COST, 1)  # nothing further can do better: no work
         s = self._settings
         start = self._q.copy()
@@ -392,9 +391,11 @@ class Solver:
         stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
         self._ws.x[:] = 0.0
         self._ws.lam[0] = s.damping
-        settled = stats.copy()
-        settled[O_ITERATIONS] = settled[O_SWEEPS] = 0
-        self._settled = (self._reach_key(), settled) if stats[O_STATUS] == Status.STALLED else None
+        self._settled = None
+        if stats[O_STATUS] == Status.STALLED:
+            settled = stats.copy()
+            settled[O_ITERATIONS] = settled[O_SWEEPS] = 0
+            self._settled = (self._reach_key(), settled)
         return self._result(stats, O_COST, attempts)
 
     def _reach_key(self) -> tuple:
@@ -438,7 +439,8 @@ class Solver:
                             self._topo.root_frame, self._W, self._q,
                             s.max_iterations if iterations is None else iterations, self._ws)
         stats = self._ws.stats.copy()
-        self._work_done += stats[[O_ITERATIONS, O_SWEEPS]].astype(np.int64)
+        self._work_done[0] += int(stats[O_ITERATIONS])
+        self._work_done[1] += int(stats[O_SWEEPS])
         return stats
 
     def _solve_by_continuation(self, q0: np.ndarray, stages: int = 4) -> np.ndarray:

@@ -28,6 +28,9 @@ from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors
 
 #: Share of an attempt's linearisations the positions-only phase may use.
 POSITION_PHASE_SHARE = 0.3
+#: Positions go first only when some orientation is this far from its target [rad]: near a solution (tracking,
+#: small drags) the full problem is already well linearised, and the extra phase would double the work.
+STAGE_ANGLE = 0.5
 #: A phase has settled when its last SETTLE_WINDOW linearisations together lowered the error by less than
 #: SETTLE_WINDOW_GAIN (relative): a best reach creeps by a little more than settle_tolerance per step for
 #: hundreds of steps, gaining nothing visible (held hand 3 m away: 0.5% in 140 linearisations).
@@ -166,7 +169,8 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     Each linearisation solves ``(J^T W J + lam I) x = J^T W e`` within the
     limits (:func:`~gsik.kernels.pgs.bounded_solve`, or PGS sweeps alone
     without subspace minimisation), the step scaled to ``settings.max_step``.
-    With ``settings.positions_first`` and orientation targets, rounds of a
+    With ``settings.positions_first`` and an orientation target off by more
+    than :data:`STAGE_ANGLE`, rounds of a
     positions-only phase then a full one, while a round lowers the error
     (see the module's docstring); the best pose is kept. Sets
     ``ws.stats[O_STATUS]`` (converged; stalled: a best reach; budget
@@ -175,7 +179,8 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     """
     sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], True)
     counts = np.zeros(2, dtype=np.int64)
-    staged = settings.positions_first and np.any(targets.row_weight[:, 3:] > 0.0)
+    _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
+    staged = settings.positions_first and np.any((targets.row_weight[:, 3] > 0.0) & (ws.err[1] > STAGE_ANGLE))
     best_q = q.copy()
     best = np.inf
     status = BUDGET_EXHAUSTED
