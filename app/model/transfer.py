@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
 
 import gsik
 from gsik.anim.motion import Motion
@@ -16,6 +17,9 @@ from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import BvhImport, import_bvh, write_motion_bvh
 from gsik.io.urdf_skeleton import skeleton_from_urdf
 from gsik_studio.model.document import Document
+
+#: Largest angle [rad] a padding DOF of an exported clip may have (the writer prints 1e-6 degrees).
+PADDING_TOLERANCE = 1e-6
 
 #: File name endings read as URDF (anything else is skeleton YAML).
 URDF_SUFFIXES = (".urdf", ".xml")
@@ -32,11 +36,21 @@ def read_clip(path: str | os.PathLike) -> BvhImport:
 
 
 def motion_on(skeleton: gsik.Skeleton, motion: Motion) -> Motion | None:
-    """``motion`` as a motion of ``skeleton`` when both have the same DOFs and frames (a clip exported from it), else None."""
+    """``motion`` as a motion of ``skeleton`` when it is a clip exported from it, else None.
+
+    DOFs match by name. The clip may have more: gsik's BVH export pads hinges and 2-DOF joints with rotation
+    channels that stay 0 (Blender reads only 0 or 3 per joint), and those come back as extra DOFs; any that moves
+    means the clip is of another skeleton.
+    """
     sk = motion.skeleton
-    if sk.dof_names != skeleton.dof_names or any(r not in skeleton.frame_names for r in set(motion.roots)):
+    column = {name: i for i, name in enumerate(sk.dof_names)}
+    if any(n not in column for n in skeleton.dof_names) or any(r not in skeleton.frame_names for r in set(motion.roots)):
         return None
-    return Motion(skeleton, motion.q, motion.roots, motion.world_from_root, motion.frame_time)
+    kept = [column[n] for n in skeleton.dof_names]
+    extra = np.setdiff1d(np.arange(sk.n_dofs), kept)
+    if extra.size and np.abs(motion.q[:, extra]).max() > PADDING_TOLERANCE:
+        return None
+    return Motion(skeleton, motion.q[:, kept], motion.roots, motion.world_from_root, motion.frame_time)
 
 
 def read_skeleton(path: str | os.PathLike) -> gsik.Skeleton:
