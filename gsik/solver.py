@@ -21,6 +21,7 @@ from gsik import control, kernels
 from gsik.balance import center_of_mass
 from gsik.errors import SolverError, TargetError, choices, show_value
 from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
+from gsik.kernels import solve as solve_kernels
 from gsik.kernels import step as step_kernels
 from gsik.kernels.kinematics import forward_kinematics
 from gsik.kinematics import Topology, kinematic_model, topology
@@ -50,6 +51,11 @@ class Status(enum.IntEnum):
         return self.name.lower().replace("_", " ")
 
 
+#: Attempts ending with weighted errors this close (relative) found the same best reach ...
+SETTLED_AGREEMENT = 1e-3
+#: ... and this many further attempts finding it again settle it: the solve stops.
+SETTLED_REPEATS = 8
+
 _STATUSES = tuple(Status)  # by code: a tuple index costs less than Status(code)
 
 
@@ -59,8 +65,9 @@ class SolveResult(NamedTuple):
     Attributes:
         q: Joint angles (n_dofs,) [rad] after the call.
         status: :class:`Status`.
-        iterations: Gauss-Seidel sweeps of a step; linearisations of a solve.
-        sweeps: Gauss-Seidel sweeps in all.
+        iterations: Gauss-Seidel sweeps of a step; linearisations of a solve,
+            all its attempts together.
+        sweeps: Gauss-Seidel sweeps in all (of all attempts).
         residual: Projected ``|Ax - b|`` of the last sweep (a step), or the
             weighted squared error ``0.5 e^T W e`` (a solve).
         effector_names: (m,) effectors, in the order of the error arrays.
@@ -68,7 +75,8 @@ class SolveResult(NamedTuple):
         orientation_errors: (m,) angle to each target orientation [rad] (0
             where the orientation is not used).
         step_norm: Size of the last change of ``q`` [rad].
-        attempts: Attempts :meth:`Solver.solve` made (1 for a step).
+        attempts: Attempts :meth:`Solver.solve` made (1 for a step; 1 with
+            no work when it starts from a settled best reach).
     """
 
     q: np.ndarray
@@ -147,6 +155,8 @@ class Solver:
             world_from_root = transform(R[f], p[f])
         self._W = self._check_world_from_root(world_from_root)
         self._targets: dict[str, Target] = {}
+        self._settled = None  # (what a solve depended on, its statistics) after a solve ended at a best reach
+        self._work_done = np.zeros(2, dtype=np.int64)  # linearisations and sweeps of the current solve
         self._posture: control.Posture | None = None
         self._balance = False
         self._controller: control.Controller | None = None  # None: to be made (or retargeted) before use
@@ -427,25 +437,48 @@ class Solver:
         starts from the posture; a converged attempt whose posture is not met
         is compared with one from the posture too, as the targets may be met
         on another branch nearer to it.
+        Each attempt (:func:`gsik.kernels.solve.solve`) meets the positions
+        first when an orientation is far off. Without priorities, posture or
+        balance the attempts stop early once the best reach is settled
+        (:data:`SETTLED_REPEATS` attempts end where the best one did, within
+        :data:`SETTLED_AGREEMENT`), and at once when a solve starts from the
+        best reach a previous solve settled on, with the same targets and
+        settings. The result counts the linearisations (``iterations``) and
+        sweeps of all attempts.
         """
         if targets is not None:
             self.set_targets(targets)
         if q0 is not None:
             self.set_q(q0)
+        if self._settled is not None and self._settled[0] == self._reach_key():
+            return self._result(self._settled[1], O_COST, 1)  # nothing further can do better: no work
         s = self._settings
         start = self._q.copy()
+        self._work_done[:] = 0
         stats = self._solve_from(start)
         attempts = 1
         if stats[O_STATUS] != Status.CONVERGED and s.restarts > 0:
             stats, attempts = self._restart(start, stats)
         elif s.restarts > 0 and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0:
             stats, attempts = self._posture_attempt(stats)
+        stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
         self._ws.x[:] = 0.0
         self._ws.lam[0] = s.damping
         if self._is_controlled:
             return self._control_result(_STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
                                         float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
+        self._settled = None
+        if stats[O_STATUS] == Status.STALLED:
+            settled = stats.copy()
+            settled[O_ITERATIONS] = settled[O_SWEEPS] = 0
+            self._settled = (self._reach_key(), settled)
         return self._result(stats, O_COST, attempts)
+
+    def _reach_key(self) -> tuple:
+        """What a solve's outcome depends on: settings, root and its pose, targets, start angles."""
+        t = self._packed
+        return (self._settings, self._topo.root_frame, self._W.tobytes(), t.position.tobytes(),
+                t.rotation.tobytes(), t.row_weight.tobytes(), self._q.tobytes())
 
     def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
         """Further attempts after a failed first one; leaves the best attempt as the state."""
@@ -454,6 +487,7 @@ class Solver:
         best = (self._attempt_rank(stats), self._q.copy(), stats)
         rng = np.random.default_rng(s.seed)
         attempts = 1
+        repeats = 0
         while stats[O_STATUS] != Status.CONVERGED and attempts <= s.restarts:
             if attempts == 1 and self._posture is not None:
                 stats = self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
@@ -464,9 +498,14 @@ class Solver:
                 alpha = min(1.0, 0.25 * attempts)
                 stats = self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
             attempts += 1
+            agrees = (not self._is_controlled
+                      and abs(stats[O_COST] - best[2][O_COST]) <= SETTLED_AGREEMENT * best[2][O_COST])
             rank = self._attempt_rank(stats)
             if stats[O_STATUS] == Status.CONVERGED or rank < best[0]:
                 best = (rank, self._q.copy(), stats)
+            repeats += agrees and stats[O_STATUS] != Status.CONVERGED
+            if repeats >= SETTLED_REPEATS:
+                break  # attempts from other starts keep finding the same best reach: the best there is to find
         if best[2] is not stats:
             # An earlier attempt was best: make it the state again (frames and errors included).
             self._solve_from(best[1], iterations=0)
@@ -489,17 +528,21 @@ class Solver:
         return (float(stats[O_COST]),)
 
     def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
-        """One Levenberg-Marquardt attempt from ``q0``; returns a copy of its statistics."""
+        """One attempt from ``q0``; returns a copy of its statistics and adds its work to ``_work_done``."""
         s = self._settings
         if self._is_controlled:
-            return self._control_solve(q0, s.max_iterations if iterations is None else iterations)
-        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
-        before = self._q.copy()
-        step_kernels.solve(self._model, s.kernel_settings(sweeps=s.solve_sweeps), self._packed,
-                           self._topo.root_frame, self._W, self._q, s.max_iterations if iterations is None else iterations,
-                           self._ws)
-        self._refuse_non_finite(before, self._ws.stats)
-        return self._ws.stats.copy()
+            stats = self._control_solve(q0, s.max_iterations if iterations is None else iterations)
+        else:
+            self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
+            before = self._q.copy()
+            solve_kernels.solve(self._model, s.kernel_settings(for_solve=True), self._packed,
+                                self._topo.root_frame, self._W, self._q,
+                                s.max_iterations if iterations is None else iterations, self._ws)
+            self._refuse_non_finite(before, self._ws.stats)
+            stats = self._ws.stats.copy()
+        self._work_done[0] += int(stats[O_ITERATIONS])
+        self._work_done[1] += int(stats[O_SWEEPS])
+        return stats
 
     def _solve_by_continuation(self, q0: np.ndarray, stages: int = 4) -> np.ndarray:
         """Approach the targets in ``stages`` from where the effectors are at ``q0``."""
@@ -509,19 +552,16 @@ class Solver:
         self._refresh_frames()
         start_p = self._ws.p[self._topo.effector_frame].copy()
         start_R = self._ws.R[self._topo.effector_frame].copy()
-        sweeps_total = 0
         try:
             for k in range(1, stages):
                 a = k / stages
                 for i in range(len(final_p)):
                     tp[i] = (1 - a) * start_p[i] + a * final_p[i]
                     tR[i] = matrix_from_rotvec(a * rotvec_from_matrix(final_R[i] @ start_R[i].T)) @ start_R[i]
-                sweeps_total += self._solve_from(self._q.copy())[O_SWEEPS]
+                self._solve_from(self._q.copy())
         finally:
             tp[:], tR[:] = final_p, final_R
-        stats = self._solve_from(self._q.copy())
-        stats[O_SWEEPS] += sweeps_total
-        return stats
+        return self._solve_from(self._q.copy())
 
     def set_root(self, name: str) -> None:
         """Make the joint or site ``name`` the IK root; the pose does not move.

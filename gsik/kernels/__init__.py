@@ -10,7 +10,7 @@
 
 Modules: :mod:`~gsik.kernels.kinematics` (FK, errors, Jacobian, normal
 equations), :mod:`~gsik.kernels.pgs` (Projected Gauss-Seidel, bounded
-solve), :mod:`~gsik.kernels.step` (a frame step and a full solve). Nothing
+solve), :mod:`~gsik.kernels.step` (a frame step), :mod:`~gsik.kernels.solve` (a solve's attempt). Nothing
 here validates anything: the public modules check their inputs first.
 """
 
@@ -75,6 +75,7 @@ class KernelSettings(NamedTuple):
     orientation_tolerance: float
     settle_tolerance: float
     subspace_minimization: bool
+    positions_first: bool
 
 
 class TargetArrays(NamedTuple):

@@ -1,4 +1,4 @@
-"""The solver's kernels: one frame step and a full solve, over the named contracts.
+"""The frame step kernel (a full solve's attempt is in :mod:`gsik.kernels.solve`), over the named contracts.
 
 ``model`` is a :class:`~gsik.kernels.KinematicModel`, ``settings`` a
 :class:`~gsik.kernels.KernelSettings`, ``targets`` a
@@ -10,10 +10,8 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from gsik._jit import njit
-from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS,
+from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, make_scratch)
 from gsik.kernels.kinematics import effector_errors, frames_into, linear_system
 from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
@@ -179,81 +177,3 @@ def _step_stats(settings, targets, ws, cost, accepted):
         st[O_STATUS] = STALLED
     else:
         st[O_STATUS] = BUDGET_EXHAUSTED
-
-
-@njit(cache=True, inline="always")
-def _damped_try(model, settings, targets, root, W, q, lam, cost, pgs_stats, ws, sc):
-    """Raise ``lam`` until a bounded step lowers the cost; take it. Returns ``(cost, lam, accepted, settled, sweeps)``."""
-    n = q.shape[0]
-    x = sc.x_solve
-    sweeps = 0
-    while lam < 1e8:
-        sc.A_damped[:, :] = sc.A
-        for i in range(n):
-            sc.A_damped[i, i] += lam
-        x[:] = 0.0
-        bounded_solve(sc.A_damped, sc.b, x, sc.lo, sc.hi, settings.sweeps, pgs_stats)
-        sweeps += int(pgs_stats[O_SWEEPS])
-        _add_clamped(q, x, model.lower, model.upper, sc.q_new)
-        c = _evaluate(model, targets, root, W, sc.q_new, sc.R_new, sc.p_new, sc.e, sc.err_new, sc.M)
-        if c < cost:
-            settled = cost - c <= settings.settle_tolerance * cost
-            q[:] = sc.q_new
-            ws.R[:, :, :] = sc.R_new
-            ws.p[:, :] = sc.p_new
-            ws.err[:, :] = sc.err_new
-            return c, max(lam * 0.3, 1e-9), True, settled, sweeps
-        lam *= 5.0
-    return cost, lam, False, False, sweeps
-
-
-@njit(cache=True)
-def solve(model, settings, targets, root, W, q, max_iterations, ws):
-    """Levenberg-Marquardt over bounded steps until the targets are met or progress stops.
-
-    Each iteration linearises, solves ``(J^T W J + lam I) x = J^T W e`` within
-    the limits (:func:`~gsik.kernels.pgs.bounded_solve`), and keeps the step
-    only if the weighted error falls; else ``lam`` grows and it tries again.
-    Sets ``ws.stats[O_STATUS]`` (converged; stalled: no step lowers the error
-    or the pose stopped changing, a best reach; budget exhausted),
-    ``O_ITERATIONS``, ``O_SWEEPS``, ``O_COST`` and ``O_STEP_NORM``.
-    ``settings.sweeps`` are the sweeps per linearisation.
-    """
-    row_w = targets.row_weight
-    pos_tol = settings.position_tolerance
-    ori_tol = settings.orientation_tolerance
-    sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], True)
-    x = sc.x_solve
-    x[:] = 0.0
-    pgs_stats = np.zeros(N_STATS)
-    lam = max(settings.damping, 1e-3)
-    cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
-    total_sweeps = 0
-    status = BUDGET_EXHAUSTED
-    it = 0
-    for it in range(max_iterations + 1):
-        sc.err_new[:, :] = ws.err
-        if _finish_errors(row_w, sc.err_new, pos_tol, ori_tol):
-            status = CONVERGED
-            break
-        if it == max_iterations:
-            break
-        linear_system(model, ws.R, ws.p, sc.e, row_w, sc.A, sc.b, sc.v)
-        _bounds(q, model.lower, model.upper, settings.max_step, sc.lo, sc.hi)
-        cost, lam, accepted, settled, sweeps = _damped_try(model, settings, targets, root, W, q, lam, cost,
-                                                           pgs_stats, ws, sc)
-        total_sweeps += sweeps
-        if not accepted or settled or math.sqrt(np.sum(x * x)) < settings.stall_tolerance:
-            status = STALLED
-            break
-    # e and err must describe the final q (a refused trial overwrote them).
-    cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
-    _finish_errors(row_w, ws.err, pos_tol, ori_tol)
-    if status == STALLED and _finish_errors(row_w, sc.err_new, pos_tol, ori_tol):
-        status = CONVERGED
-    st = ws.stats
-    st[O_STATUS] = status
-    st[O_ITERATIONS] = it
-    st[O_SWEEPS] = total_sweeps
-    st[O_COST] = cost
-    st[O_STEP_NORM] = math.sqrt(np.sum(x * x))
