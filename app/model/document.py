@@ -24,6 +24,7 @@ import numpy as np
 import gsik
 from gsik.errors import choices
 from gsik.anim.motion import Motion
+from gsik.anim.scenario_run import QUIET_FRAMES, SETTLED
 from gsik.io.pose import Pose, PoseRead, read_pose, write_pose
 from gsik.targets import Target
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
@@ -53,7 +54,9 @@ class Document:
         events: What changed (see :class:`gsik_studio.model.events.DocumentEvents`).
         last_result: The last solver step's result (None after the pose was replaced).
         last_solve_time: How long the last solver step took [s].
-        needs_solving: True while more solver steps would move the pose.
+        needs_solving: True while more solver steps would move the pose: until
+            :data:`gsik.anim.scenario_run.QUIET_FRAMES` steps in a row reported converged or
+            best reach, the rule ``gsik scenarios`` settles by, so both end a scenario alike.
     """
 
     #: Effectors whose targets start position-only: the biped's arms have no
@@ -378,8 +381,16 @@ class Document:
         result = self.solver.step()
         self.last_solve_time = time.perf_counter() - t0
         self.last_result = result
-        self.needs_solving = result.status is gsik.Status.BUDGET_EXHAUSTED
+        self._quiet = self._quiet + 1 if result.status in SETTLED else 0
         return result
+
+    @property
+    def needs_solving(self) -> bool:
+        return self._quiet < QUIET_FRAMES
+
+    @needs_solving.setter
+    def needs_solving(self, needed: bool) -> None:
+        self._quiet = 0 if needed else QUIET_FRAMES
 
     def configure(self, **changes) -> None:
         """Change solver settings (validated by gsik; :class:`gsik.SolverError` on a bad value)."""
