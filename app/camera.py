@@ -65,16 +65,26 @@ def frame_points(plotter, points: np.ndarray, margin: float = FRAME_MARGIN, leas
     distance = float(np.max(np.maximum(x / (tan_v * aspect), y / tan_v) + z))
     cam.focal_point = center
     cam.position = center + max(distance, least) * back
-    cam.up = up
     half_height = float(max(np.max(y), np.max(x) / aspect)) / (1.0 - margin)
     cam.parallel_scale = max(half_height, least / 2)
     plotter.renderer.ResetCameraClippingRange()
+
+
+def _level(cam) -> None:
+    """View-up along world z, the horizon level, unless the camera looks (almost) straight up or down."""
+    back = np.array(cam.position, dtype=float) - np.array(cam.focal_point, dtype=float)
+    if abs(back[2]) < 0.999 * np.linalg.norm(back):
+        cam.up = (0.0, 0.0, 1.0)
 
 
 def set_orbit(plotter, orbit: str) -> None:
     """Left-drag orbit: ``"turntable"`` (z up, no roll; shift-drag pans, wheel zooms) or ``"trackball"``."""
     if orbit == "turntable":
         plotter.enable_terrain_style(mouse_wheel_zooms=True, shift_pans=True)
+        # The terrain style turns about the camera's view-up: make it the world's z (unless looking straight
+        # down, where z cannot be the view-up; the top view keeps y up until the first tilt).
+        plotter.iren.interactor.GetInteractorStyle().AddObserver("StartInteractionEvent",
+                                                                 lambda *_: _level(plotter.camera))
     elif orbit == "trackball":
         plotter.enable_trackball_style()
     else:

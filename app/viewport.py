@@ -458,7 +458,7 @@ class Viewport:
         at most :data:`PICK_TOLERANCE_PX`; (0, 0) for a direct hit or nothing near (display pixels, origin
         bottom-left). The selected target is left out: its rotate box surrounds it."""
         cam = self.plotter.camera
-        right = np.cross(np.array(cam.direction_of_projection), np.array(cam.up))
+        right = np.cross(np.array(cam.GetDirectionOfProjection()), np.array(cam.up))
         right /= max(np.linalg.norm(right), 1e-12)
         best, offset = np.inf, (0.0, 0.0)
         for name, w in zip(self._sites, self.target_widgets):
