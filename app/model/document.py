@@ -54,9 +54,10 @@ class Document:
         events: What changed (see :class:`gsik_studio.model.events.DocumentEvents`).
         last_result: The last solver step's result (None after the pose was replaced).
         last_solve_time: How long the last solver step took [s].
-        needs_solving: True while more solver steps would move the pose: until
-            :data:`gsik.anim.scenario_run.QUIET_FRAMES` steps in a row reported converged or
-            best reach, the rule ``gsik scenarios`` settles by, so both end a scenario alike.
+        needs_solving: True while more solver steps would move the pose: until a step
+            converges, or :data:`gsik.anim.scenario_run.QUIET_FRAMES` steps in a row report
+            converged or best reach (``gsik scenarios`` settles by the same rule, so both end a
+            scenario alike: a single best-reach step can be followed by progress).
     """
 
     #: Effectors whose targets start position-only: the biped's arms have no
@@ -381,7 +382,10 @@ class Document:
         result = self.solver.step()
         self.last_solve_time = time.perf_counter() - t0
         self.last_result = result
-        self._quiet = self._quiet + 1 if result.status in SETTLED else 0
+        if result.status is gsik.Status.CONVERGED:
+            self._quiet = QUIET_FRAMES
+        else:
+            self._quiet = self._quiet + 1 if result.status in SETTLED else 0
         return result
 
     @property
