@@ -35,18 +35,28 @@ class ViewWidget(QtInteractor):
         super().__init__(parent, **kwargs)
         self.renders = 0
         self._offset: QtCore.QPointF | None = None  # the snapped press's shift, until the release
+        self._painting = False
         iren = self.iren.interactor
         iren.EnableRenderOff()  # interaction events only ask for a paint (RenderEvent below)
-        iren.AddObserver("RenderEvent", lambda *_: self.update())
+        iren.AddObserver("RenderEvent", self._on_render_event)
+        self.installEventFilter(self)
         self.setFocusPolicy(QtCore.Qt.StrongFocus)
         self.setMouseTracking(True)
 
-    def paintEvent(self, ev):  # noqa: N802 (Qt's name)
-        """The one place the scene renders: Qt calls it once per turn for any number of update()s."""
-        if getattr(self, "_closed", False) or self.render_window is None:
-            return
-        self.renders += 1
-        self.render_window.Render()
+    def eventFilter(self, obj, ev):  # noqa: N802 (Qt's name)
+        """A paint renders (the base class's paintEvent calls the interactor's Render): allow that one."""
+        if obj is self and ev.type() == QtCore.QEvent.Paint and not getattr(self, "_closed", False):
+            self._painting = True
+            self.iren.interactor.EnableRenderOn()
+        return False
+
+    def _on_render_event(self, *_) -> None:
+        if self._painting:  # this paint's own render: done; back to asking for paints
+            self._painting = False
+            self.iren.interactor.EnableRenderOff()
+            self.renders += 1
+        else:
+            self.update()
 
     def enterEvent(self, ev):  # noqa: N802 (Qt's name)
         self._take_focus()

@@ -42,7 +42,7 @@ def time_to_windows(cache: str, timeout: float = 300.0) -> tuple[float, float]:
         env["HOME"] = env["XDG_CONFIG_HOME"] = home  # no remembered window geometry or settings
         t0 = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "gsik_studio"], env=env, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL)
+                                stderr=subprocess.PIPE, text=True)
         first = main = None
         try:
             while main is None and time.perf_counter() - t0 < timeout and proc.poll() is None:
@@ -53,9 +53,9 @@ def time_to_windows(cache: str, timeout: float = 300.0) -> tuple[float, float]:
                 time.sleep(0.05)
         finally:
             proc.terminate()
-            proc.wait(30)
+            err = proc.communicate(timeout=30)[1]
     if main is None:
-        raise SystemExit(f"no main window within {timeout:.0f} s (exit code {proc.returncode})")
+        raise SystemExit(f"no main window within {timeout:.0f} s (exit code {proc.returncode}): {err[-500:]}")
     return (first if first is not None else main), main
 
 
