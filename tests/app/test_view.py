@@ -13,21 +13,6 @@ import pytest
 pytestmark = pytest.mark.gui
 
 
-@pytest.fixture()
-def window(qtbot, studio_settings):
-    from gsik_studio.window import MainWindow
-
-    w = MainWindow(settings=studio_settings)
-    w.resize(1280, 860)
-    w.show()
-    qtbot.waitExposed(w)
-    w.activateWindow()
-    qtbot.wait(50)
-    yield w
-    w.doc.history.set_clean()
-    w.close()
-
-
 def _qpoint(window, x, y):
     """Qt widget coordinates of display pixel (x, y) (origin bottom-left) in the 3D view."""
     from PySide6 import QtCore
