@@ -18,8 +18,9 @@
    target sphere, then moves along a circle, release) go into each 3D view,
    through VTK's interactor and sphere widget as a person's drag does; one
    event-loop turn per mouse event, the app's own timer stepping the solver.
-   Frames per second are VTK renders per second of wall time; renders per
-   mouse event are counted on the render window.
+   Frames per second count renders that show a new mouse position (at most
+   one per mouse event) per second of wall time; renders per mouse event
+   are counted on the render window.
 
 Printed: frames per second of both, the app's own time per frame excluding
 VTK rendering and Qt painting (document command, solver step, scene update,
@@ -278,7 +279,8 @@ class MouseDrag:
 
     @property
     def fps(self) -> float:
-        return self.frames / self.seconds
+        """Frames that showed a new mouse position per second: a second render of the same event is not one."""
+        return min(self.frames, self.events) / self.seconds
 
     @property
     def renders_per_event(self) -> float:
