@@ -429,9 +429,13 @@ class Viewport:
         """Look from a preset direction (see :data:`gsik_studio.camera.VIEWS`) and frame the character."""
         camera.set_view(self.plotter, name, self.character_points())
 
-    def frame_all(self) -> None:
-        """Fit the character and its targets in the view, keeping the viewing direction (no render)."""
-        camera.frame_points(self.plotter, self.character_points())
+    def frame_all(self, extra: np.ndarray | None = None) -> None:
+        """Fit the character, its targets and ``extra`` points (m, 3) [m] in the view, keeping the viewing
+        direction (no render)."""
+        pts = self.character_points()
+        if extra is not None:
+            pts = np.vstack([pts, np.asarray(extra, dtype=float).reshape(-1, 3)])
+        camera.frame_points(self.plotter, pts)
 
     def frame_selected(self, radius: float = 0.15) -> None:
         """Fit the selected target and its effector, ``radius`` [m] around them (all when none is selected)."""

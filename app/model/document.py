@@ -30,8 +30,10 @@ from gsik.targets import Target
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
 from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
+from gsik_studio.model.library import PoseLibrary
 from gsik_studio.model.mirror import mirror_map
 from gsik_studio.model.poses import RootPlacement, check_pose, driven_target, standing_pose, target_at
+from gsik_studio.model.timeline import Timeline
 
 if TYPE_CHECKING:
     from gsik_studio.model.playback import Playback
@@ -54,10 +56,8 @@ class Document:
         events: What changed (see :class:`gsik_studio.model.events.DocumentEvents`).
         last_result: The last solver step's result (None after the pose was replaced).
         last_solve_time: How long the last solver step took [s].
-        needs_solving: True while more solver steps would move the pose: until a step
-            converges, or :data:`gsik.anim.scenario_run.QUIET_FRAMES` steps in a row report
-            converged or best reach (``gsik scenarios`` settles by the same rule, so both end a
-            scenario alike: a single best-reach step can be followed by progress).
+        needs_solving: True until a step converges or QUIET_FRAMES steps in a row settle (the rule of
+            ``gsik scenarios``: one best-reach step can be followed by progress).
     """
 
     #: Effectors whose targets start position-only: the biped's arms have no
@@ -78,6 +78,8 @@ class Document:
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
         self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
+        self.timeline = Timeline(self)  # the motion kept with the pose
+        self.library = PoseLibrary(self)  # named poses, undone with the pose
 
     # -- read-outs -------------------------------------------------------------
     @property
@@ -187,9 +189,10 @@ class Document:
         merging = self.history.would_merge(merge_key)
         before = self.history.commands[-1].before if merging else self.pose()  # a drag keeps its first "before"
         file_state = self._file_state()
+        library = self.library.snapshot()
         apply()
         self.needs_solving = True
-        self.history.push(Command(text, before, merge_key=merge_key))
+        self.history.push(Command(text, before, merge_key=merge_key, library_before=library))
         (signal or self.events.pose).emit()
         if not merging:
             self.events.history.emit()
@@ -357,9 +360,10 @@ class Document:
             return False
         file_state = self._file_state()
         cmd = self.history.commands[self.history.index - 1]
-        cmd.after = self.pose()
+        cmd.after, cmd.library_after = self.pose(), self.library.snapshot()
         cmd.merge_key = None
         self._restore(cmd.before)
+        self.library.restore(cmd.library_before)
         self.history.index -= 1
         self._replaced(file_state)
         return True
@@ -370,7 +374,9 @@ class Document:
         if not self.history.can_redo:
             return False
         file_state = self._file_state()
-        self._restore(self.history.commands[self.history.index].after)
+        cmd = self.history.commands[self.history.index]
+        self._restore(cmd.after)
+        self.library.restore(cmd.library_after)
         self.history.index += 1
         self._replaced(file_state)
         return True
@@ -382,19 +388,12 @@ class Document:
         result = self.solver.step()
         self.last_solve_time = time.perf_counter() - t0
         self.last_result = result
-        if result.status is gsik.Status.CONVERGED:
-            self._quiet = QUIET_FRAMES
-        else:
-            self._quiet = self._quiet + 1 if result.status in SETTLED else 0
+        settled = self._quiet + 1 if result.status in SETTLED else 0
+        self._quiet = QUIET_FRAMES if result.status is gsik.Status.CONVERGED else settled
         return result
 
-    @property
-    def needs_solving(self) -> bool:
-        return self._quiet < QUIET_FRAMES
-
-    @needs_solving.setter
-    def needs_solving(self, needed: bool) -> None:
-        self._quiet = 0 if needed else QUIET_FRAMES
+    needs_solving = property(lambda self: self._quiet < QUIET_FRAMES,
+                             lambda self, needed: setattr(self, "_quiet", 0 if needed else QUIET_FRAMES))
 
     def configure(self, **changes) -> None:
         """Change solver settings (validated by gsik; :class:`gsik.SolverError` on a bad value)."""
@@ -413,6 +412,7 @@ class Document:
         self._interrupt_playback()
         file_state = self._file_state()
         self._restore(read.pose)
+        self.library.restore(read.library)
         self.history.clear()
         self.path = str(path)
         if read.warnings:
@@ -430,7 +430,7 @@ class Document:
         if not target:
             raise gsik.GsikFileError("no file name to save to (use Save As)")
         file_state = self._file_state()
-        write_pose(target, self.pose())
+        write_pose(target, self.pose(), self.library.snapshot())
         self.path = str(target)
         self.history.set_clean()
         self._emit_file(file_state)
@@ -440,6 +440,8 @@ class Document:
         self._interrupt_playback()
         file_state = self._file_state()
         self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
+        self.library.restore(())
+        self.timeline.clear()
         self.history.clear()
         self.path = None
         self._replaced(file_state)
@@ -494,6 +496,6 @@ class Document:
         if self._playback is playback:
             self._playback = None
         file_state = self._file_state()
-        self.history.push(Command(playback.text, playback.before))
+        self.history.push(Command(playback.text, playback.before, library_before=self.library.snapshot()))
         self.needs_solving = True
         self._replaced(file_state)
