@@ -56,8 +56,7 @@ class Document:
         events: What changed (see :class:`gsik_studio.model.events.DocumentEvents`).
         last_result: The last solver step's result (None after the pose was replaced).
         last_solve_time: How long the last solver step took [s].
-        needs_solving: True until a step converges or QUIET_FRAMES steps in a row settle (the rule of
-            ``gsik scenarios``: one best-reach step can be followed by progress).
+        needs_solving: True until a step converges or QUIET_FRAMES steps in a row settle (as ``gsik scenarios``).
     """
 
     #: Effectors whose targets start position-only: the biped's arms have no
