@@ -71,8 +71,15 @@ ACTIONS: tuple[ActionSpec, ...] = (
                "Play a walk: the IK root swaps between the feet at every step", S.SP_MediaSeekForward),
     ActionSpec("pause", "Pause", lambda w, on: w.set_paused(on), "Space", "Pause or resume solving", S.SP_MediaPause,
                checkable=True),
-    ActionSpec("frame", "Frame all", lambda w: w.viewport.frame_all(), "F", "Fit the character in the view"),
-    *(ActionSpec(f"view_{n}", n.capitalize(), _view(n), key, f"{n.capitalize()} view") for n, key in VIEW_KEYS),
+    ActionSpec("frame", "Frame all", lambda w: w.frame_all(), ("F", "Home"), "Fit the character in the view"),
+    ActionSpec("frame_selected", "Frame selected", lambda w: w.frame_selected(), ("Shift+F", "."),
+               "Fit the selected target and its effector in the view"),
+    *(ActionSpec(f"view_{n}", n.capitalize(), _view(n), key,
+                 f"{n.capitalize()} view" + ("" if n == "perspective" else " (orthographic)"))
+      for n, key in VIEW_KEYS),
+    ActionSpec("trackball", "Trackball orbit", lambda w, on: w.set_orbit("trackball" if on else "turntable"), None,
+               "Orbit freely (the horizon may roll); off: turntable, z stays up", checkable=True),
+    ActionSpec("shortcuts", "&Shortcuts", lambda w: w.show_shortcuts(), "F1", "List the keyboard and mouse controls"),
 )
 
 #: Menus: (title, entries); an entry names an action or a submenu, None is a separator.
@@ -81,8 +88,9 @@ MENUS = (
                None, "screenshot", None, "quit")),
     ("&Edit", ("undo", "redo")),
     ("&Pose", ("root_left", "root_right", None, "reset", "random", "mirror_lr", "mirror_rl", "walk", "scenarios")),
-    ("&View", ("frame", *(f"view_{n}" for n, _ in VIEW_KEYS))),
+    ("&View", ("frame", "frame_selected", None, *(f"view_{n}" for n, _ in VIEW_KEYS), None, "trackball")),
     ("&Solver", ("pause",)),
+    ("&Help", ("shortcuts",)),
 )
 
 TOOLBAR = ("open", "save", None, "undo", "redo", None, "root_left", "root_right", None, "reset", "random",

@@ -12,8 +12,8 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gsik-studio", description="Interactive IK pose authoring (gsik).")
     p.add_argument("pose", nargs="?", help="a pose file (.yaml) to open")
     p.add_argument("--screenshot", metavar="PNG", help="render the window once to this PNG and exit")
-    p.add_argument("--size", default="1440x900", metavar="WxH", help="window size (default 1440x900)")
-    p.add_argument("--view", default="perspective", choices=("perspective", "front", "side", "top"),
+    p.add_argument("--size", metavar="WxH", help="window size (default: as last time, else 1440x900)")
+    p.add_argument("--view", choices=("perspective", "front", "side", "top"),
                    help="camera preset (default perspective)")
     return p
 
@@ -26,12 +26,10 @@ def _application():
     from gsik_studio.qt_compat import protect_none
 
     protect_none()  # PySide6 6.12 on Python 3.11 drops references to None (see gsik_studio.qt_compat)
-    import pyvista as pv
     from PySide6 import QtWidgets
 
     from gsik_studio.widgets.theme import apply_dark_theme
 
-    pv.global_theme.multi_samples = 0
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([sys.argv[0]])
     app.setApplicationName("gsik-studio")
     app.setOrganizationName("gsik")
@@ -63,7 +61,7 @@ def _screenshot(app, args, size: tuple[int, int]) -> int:
         window.show()
         app.processEvents()
         window.settle()
-        window.set_view(args.view)
+        window.set_view(args.view or "perspective")
         app.processEvents()
         ok = window.save_screenshot(args.screenshot)
         doc.history.set_clean()
@@ -77,27 +75,52 @@ def _screenshot(app, args, size: tuple[int, int]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Run gsik-studio; returns the exit code."""
+    from gsik_studio import preflight
+
     args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        width, height = (int(v) for v in args.size.lower().split("x"))
+        width, height = (int(v) for v in (args.size or "1440x900").lower().split("x"))
     except ValueError:
         print(f"gsik-studio: --size must look like 1440x900, got {args.size!r}", file=sys.stderr)
         return 2
+    problem = preflight.check()
+    if problem is not None:
+        print(problem[1], file=sys.stderr)
+        return problem[0]
     app = _application()
     if args.screenshot:
+        import pyvista as pv
+
+        pv.global_theme.multi_samples = 0
         return _screenshot(app, args, (width, height))
-
-    from PySide6 import QtCore
-
-    from gsik_studio.window import MainWindow
-
-    window = MainWindow()
-    if window.settings.value("window/geometry") is None:
-        window.resize(width, height)
-    window.show()
+    window = open_window(app, args, (width, height))
     if args.pose:
+        from PySide6 import QtCore
+
         QtCore.QTimer.singleShot(0, lambda: window.open_path(args.pose, confirm=False))
     return app.exec()
+
+
+def open_window(app, args: argparse.Namespace, size: tuple[int, int]):
+    """The main window, shown: a start window appears at once and says what loads meanwhile.
+
+    ``--size`` and ``--view``, when given, win over the remembered geometry and the default view.
+    """
+    from gsik_studio.starting import StartWindow, load_document
+
+    start = StartWindow(size)
+    start.show()
+    doc = load_document(app, start)
+    from gsik_studio.window import MainWindow
+
+    window = MainWindow(doc)
+    if args.size or window.settings.value("window/geometry") is None:
+        window.resize(*size)
+    window.show()
+    start.close()
+    if args.view:
+        window.set_view(args.view)
+    return window
 
 
 if __name__ == "__main__":

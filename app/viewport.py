@@ -29,6 +29,7 @@ import pyvista as pv
 import vtk
 
 from gsik.rotations import quaternion_from_matrix, transform
+from gsik_studio import camera
 from gsik_studio.model import Document, Signal
 from gsik_studio.scene import glyph_actor, line_cells, points_view, rgb8, set_colors, touch
 
@@ -56,16 +57,7 @@ TARGET_OPACITY = 0.6  # the achieved effector shows through its target
 JOINT_RADIUS = 0.022  # [m]
 EFFECTOR_RADIUS = 0.026  # [m]
 BOX_SIZE = 0.16  # [m]
-
-VIEWS = {
-    # name: (direction from the focal point to the camera, view up)
-    "front": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
-    "back": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
-    "side": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-    "top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
-    "perspective": ((0.5, 0.8, 0.3), (0.0, 0.0, 1.0)),
-}
-
+PICK_TOLERANCE_PX = 8  # a press this many pixels off a target's sphere still grabs it
 
 def _ring_and_stick(axis: np.ndarray) -> np.ndarray:
     """(RING_POINTS + 2, 3) points of a ring around ``axis`` and a stick along it, in the DOF's frame."""
@@ -423,53 +415,38 @@ class Viewport:
         self.plotter.update()
 
     # -- camera ------------------------------------------------------------------
+    def character_points(self) -> np.ndarray:
+        """(k, 3) every frame of the character and every target [m]."""
+        T = np.array([t.position for t in self.doc.targets.values()]).reshape(-1, 3)
+        return np.vstack([self.doc.world_positions(), T])
+
     def character_bounds(self) -> tuple[float, ...]:
-        P = self.doc.world_positions()
-        T = np.array([t.position for t in self.doc.targets.values()] or np.zeros((0, 3))).reshape(-1, 3)
-        pts = np.vstack([P, T])
+        pts = self.character_points()
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         return (lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
 
     def set_view(self, name: str) -> None:
-        """Look from a preset direction (see :data:`VIEWS`) and frame the character."""
-        try:
-            direction, up = VIEWS[name]
-        except KeyError:
-            raise ValueError(f"unknown view {name!r}; views: {', '.join(VIEWS)}") from None
-        cam = self.plotter.camera
-        b = self.character_bounds()
-        center = np.array([(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2])
-        cam.focal_point = center
-        cam.position = center + np.asarray(direction) / np.linalg.norm(direction)
-        cam.up = up
-        self.frame_all()
+        """Look from a preset direction (see :data:`gsik_studio.camera.VIEWS`) and frame the character."""
+        camera.set_view(self.plotter, name, self.character_points())
 
-    def frame_all(self, margin: float = 0.14, extra: np.ndarray | None = None) -> None:
-        """Fit the character, its targets and ``extra`` points (m, 3) [m] in the view, keeping the viewing direction."""
-        cam = self.plotter.camera
-        P = self.doc.world_positions()
-        T = np.array([t.position for t in self.doc.targets.values()]).reshape(-1, 3)
-        pts = np.vstack([P, T] if extra is None else [P, T, np.asarray(extra, dtype=float).reshape(-1, 3)])
-        center = (pts.min(axis=0) + pts.max(axis=0)) / 2
-        back = np.array(cam.position) - np.array(cam.focal_point)
-        back /= np.linalg.norm(back)
-        up = np.array(cam.up, dtype=float)
-        up = up - (up @ back) * back
-        if np.linalg.norm(up) < 1e-9:
-            up = np.array([0.0, 1.0, 0.0]) if abs(back[2]) > 0.9 else np.array([0.0, 0.0, 1.0])
-            up = up - (up @ back) * back
-        up /= np.linalg.norm(up)
-        right = np.cross(up, back)
-        rel = pts - center
-        x, y, z = rel @ right, rel @ up, rel @ back
-        w, h = self.plotter.window_size
-        tan_v = np.tan(np.radians(cam.view_angle) / 2) * (1.0 - margin)
-        tan_h = tan_v * max(w, 1) / max(h, 1)
-        distance = float(np.max(np.maximum(np.abs(x) / tan_h, np.abs(y) / tan_v) + z))
-        cam.focal_point = center
-        cam.position = center + max(distance, 0.5) * back
-        cam.up = up
-        self.plotter.renderer.ResetCameraClippingRange()
+    def frame_all(self, extra: np.ndarray | None = None) -> None:
+        """Fit the character, its targets and ``extra`` points (m, 3) [m] in the view, keeping the viewing
+        direction (no render)."""
+        pts = self.character_points()
+        if extra is not None:
+            pts = np.vstack([pts, np.asarray(extra, dtype=float).reshape(-1, 3)])
+        camera.frame_points(self.plotter, pts)
+
+    def frame_selected(self, radius: float = 0.15) -> None:
+        """Fit the selected target and its effector, ``radius`` [m] around them (all when none is selected)."""
+        t = self.doc.targets.get(self.selected) if self.selected else None
+        if t is None:
+            self.frame_all()
+            return
+        achieved = self.doc.effector_poses()[self.selected][:3, 3]
+        pts = np.vstack([t.position, achieved])
+        box = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * radius
+        camera.frame_points(self.plotter, (pts[:, None, :] + box[None]).reshape(-1, 3), least=0.2)
 
     # -- helpers for tests and tools --------------------------------------------------
     def world_to_display(self, point) -> tuple[float, float]:
@@ -479,6 +456,27 @@ class Viewport:
         ren.WorldToDisplay()
         x, y, _ = ren.GetDisplayPoint()
         return x, y
+
+    def snap_offset(self, x: float, y: float) -> tuple[float, float]:
+        """Display offset (dx, dy) [px] that moves a press at (x, y) onto the nearest target sphere it misses by
+        at most :data:`PICK_TOLERANCE_PX`; (0, 0) for a direct hit or nothing near (display pixels, origin
+        bottom-left). The selected target is left out: its rotate box surrounds it."""
+        cam = self.plotter.camera
+        right = np.cross(np.array(cam.GetDirectionOfProjection()), np.array(cam.up))
+        right /= max(np.linalg.norm(right), 1e-12)
+        best, offset = np.inf, (0.0, 0.0)
+        for name, w in zip(self._sites, self.target_widgets):
+            if not w.GetEnabled():
+                continue
+            c = np.array(w.GetCenter())
+            cx, cy = self.world_to_display(c)
+            rx, ry = self.world_to_display(c + TARGET_RADIUS * right)
+            d, r = np.hypot(cx - x, cy - y), np.hypot(rx - cx, ry - cy)
+            if d <= r:
+                return 0.0, 0.0
+            if name != self.selected and d <= r + PICK_TOLERANCE_PX and d < best:
+                best, offset = d, (cx - x, cy - y)
+        return offset
 
     def n_scene_objects(self) -> dict[str, int]:
         """How many actors and widgets the scene holds (for the benchmark's bare scene)."""

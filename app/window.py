@@ -53,8 +53,8 @@ class MainWindow(QtWidgets.QMainWindow):
         protect_none()  # PySide6 6.12 on Python 3.11 (see gsik_studio.qt_compat)
         super().__init__(parent)
         import pyvista as pv
-        from pyvistaqt import QtInteractor
 
+        from gsik_studio.view_widget import ViewWidget
         from gsik_studio.viewport import Viewport
 
         pv.global_theme.multi_samples = 0  # software GL: multisampling costs 3-5x
@@ -64,10 +64,11 @@ class MainWindow(QtWidgets.QMainWindow):
         self.run_timers = run_timers
         self.others: list[MainWindow] = []  # windows of documents imported from this one
 
-        self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
+        self.plotter = ViewWidget(self, auto_update=False, multi_samples=0)
         self.plotter.installEventFilter(self)  # VTK's own key bindings ('e', 'q', 'w', ...) are not wanted
         self.setCentralWidget(self.plotter)
         self.viewport = Viewport(self.plotter, self.doc)
+        self.plotter.snap_press = self.viewport.snap_offset  # a click a few pixels off a target grabs it
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
                                  self._show_opened, self.open_document)
         self._make_actions()
@@ -82,6 +83,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.play_timer.timeout.connect(self._play_tick)
         self._connect()
         self._restore_geometry()
+        self.set_orbit(str(self.settings.value("view/orbit", "turntable")))
 
         for _ in range(2):  # compiles / loads the numba kernels now, not on the first drag
             self.doc.step()
@@ -285,6 +287,34 @@ class MainWindow(QtWidgets.QMainWindow):
     def set_view(self, name: str) -> None:
         self.viewport.set_view(name)
         self.viewport.render()
+
+    def frame_all(self) -> None:
+        self.viewport.frame_all()
+        self.viewport.render()
+
+    def frame_selected(self) -> None:
+        self.viewport.frame_selected()
+        self.viewport.render()
+
+    def set_orbit(self, orbit: str) -> None:
+        """``"turntable"`` (z up, the default) or ``"trackball"``; remembered."""
+        from gsik_studio import camera
+
+        if orbit not in camera.ORBITS:
+            orbit = "turntable"
+        camera.set_orbit(self.plotter, orbit)
+        with QtCore.QSignalBlocker(self.act_trackball):
+            self.act_trackball.setChecked(orbit == "trackball")
+        self.settings.setValue("view/orbit", orbit)
+
+    def show_shortcuts(self) -> None:
+        """Help → Shortcuts: every key of the action tables and the mouse controls (a non-modal dialog)."""
+        from gsik_studio.widgets.shortcuts import ShortcutsDialog
+
+        if getattr(self, "shortcuts_dialog", None) is None:
+            self.shortcuts_dialog = ShortcutsDialog(self, self.findChildren(QtGui.QAction))
+        self.shortcuts_dialog.show()
+        self.shortcuts_dialog.raise_()
 
     def undo(self) -> None:
         if self.doc.undo():

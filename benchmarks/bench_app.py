@@ -14,10 +14,18 @@
    box widget), whose points are moved in place each frame and rendered the
    same way: the floor this machine's rendering puts under any app.
 
+3. Both again under real mouse drags: Qt mouse events (``QTest``: press on a
+   target sphere, then moves along a circle, release) go into each 3D view,
+   through VTK's interactor and sphere widget as a person's drag does; one
+   event-loop turn per mouse event, the app's own timer stepping the solver.
+   Frames per second count renders that show a new mouse position (at most
+   one per mouse event) per second of wall time; renders per mouse event
+   are counted on the render window.
+
 Printed: frames per second of both, the app's own time per frame excluding
 VTK rendering and Qt painting (document command, solver step, scene update,
-read-outs), and the solver's share of it. Timings vary with machine load;
-nothing here is asserted by the tests.
+read-outs), and the solver's share of it; the last line is the real-mouse
+ratio. Timings vary with machine load; nothing here is asserted by the tests.
 """
 
 from __future__ import annotations
@@ -223,6 +231,62 @@ class BareRun:
         return out
 
 
+class MouseDrag:
+    """Drags one target sphere of a 3D view with real Qt mouse events, one event-loop turn per event."""
+
+    def __init__(self, app, plotter, center_world, radius_px: float = 60.0):
+        self.app, self.pl = app, plotter
+        ren = plotter.renderer
+        ren.SetWorldPoint(*center_world, 1.0)
+        ren.WorldToDisplay()
+        self.x, self.y, _ = ren.GetDisplayPoint()
+        self.radius = radius_px
+        self.renders = 0
+        plotter.render_window.AddObserver("EndEvent", self._count)
+        self.events = 0
+        self.seconds = 0.0
+        self.k = 0
+
+    def _count(self, *_):
+        self.renders += 1
+
+    def _qpoint(self, dx: float, dy: float):
+        from PySide6 import QtCore
+
+        ratio = self.pl.devicePixelRatioF()
+        return QtCore.QPoint(int(round((self.x + dx) / ratio)), int(round(self.pl.height() - (self.y + dy) / ratio - 1)))
+
+    def run(self, n_moves: int, record: bool = True) -> None:
+        """Press on the sphere, ``n_moves`` moves around a circle (back where it started), release."""
+        from PySide6 import QtCore
+        from PySide6.QtTest import QTest
+
+        left, none = QtCore.Qt.LeftButton, QtCore.Qt.NoModifier
+        QTest.mouseMove(self.pl, self._qpoint(0, 0))
+        QTest.mousePress(self.pl, left, none, self._qpoint(0, 0))
+        self.app.processEvents()
+        r0, t0 = self.renders, time.perf_counter()
+        for i in range(1, n_moves + 1):
+            a = 2 * np.pi * i / n_moves
+            QTest.mouseMove(self.pl, self._qpoint(self.radius * np.sin(a), self.radius * (1 - np.cos(a))))
+            self.app.processEvents()
+        if record:
+            self.seconds += time.perf_counter() - t0
+            self.events += n_moves
+            self.frames = getattr(self, "frames", 0) + self.renders - r0
+        QTest.mouseRelease(self.pl, left, none, self._qpoint(0, 0))
+        self.app.processEvents()
+
+    @property
+    def fps(self) -> float:
+        """Frames that showed a new mouse position per second: a second render of the same event is not one."""
+        return min(self.frames, self.events) / self.seconds
+
+    @property
+    def renders_per_event(self) -> float:
+        return self.frames / self.events
+
+
 def _fps(frame_times: list[float]) -> float:
     return len(frame_times) / sum(frame_times)
 
@@ -254,6 +318,7 @@ def main() -> None:
                 run.frame()
         done += n
     fps_app, fps_bare, fps_vp = (_fps(r.frame_times) for r in runs)
+    drags = _mouse_drags(app_run, bare_vp, args)
     info, bare_info, vp_info = (r.close() for r in runs)
     app_ms = 1e3 * statistics.median(app_run.app_times)
     p95 = 1e3 * float(np.percentile(app_run.app_times, 95))
@@ -271,6 +336,32 @@ def main() -> None:
     print(f"  app / bare:            {100 * fps_app / fps_bare:6.1f} %")
     print(f"  bare scene, window the size of the app's 3D view {vp_info['viewport'][0]}x{vp_info['viewport'][1]}: "
           f"{fps_vp:.1f} fps (app / that: {100 * fps_app / fps_vp:.1f} %)")
+    app_drag, bare_drag = drags
+    print(f"  real mouse drags ({app_drag.events} Qt mouse moves per scene, one event-loop turn each; bare scene "
+          f"the size of the app's 3D view): renders per mouse event app {app_drag.renders_per_event:.2f}, "
+          f"bare {bare_drag.renders_per_event:.2f}")
+    print(f"app/bare under real mouse drags: {100 * app_drag.fps / bare_drag.fps:.0f}% "
+          f"(app {app_drag.fps:.1f} fps, bare {bare_drag.fps:.1f} fps)")
+
+
+def _mouse_drags(app_run: AppRun, bare: BareRun, args) -> tuple[MouseDrag, MouseDrag]:
+    """Both scenes dragged by real Qt mouse events in turns; the app's solver runs on its own timer."""
+    w = app_run.w
+    w.run_timers = True
+    name = "left_hand"
+    k = w.viewport._sites.index(name)
+    app_drag = MouseDrag(app_run.app, w.plotter, w.viewport.target_widgets[k].GetCenter())
+    bare_drag = MouseDrag(bare.app, bare.pl, bare.widgets[k].GetCenter())
+    for d in (app_drag, bare_drag):
+        d.run(20, record=False)  # warm up
+    done = 0
+    while done < args.frames:
+        n = min(args.block * 2, args.frames - done)
+        for d in (app_drag, bare_drag):
+            d.run(n)
+        done += n
+    w.doc.history.set_clean()
+    return app_drag, bare_drag
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ import numpy as np
 import gsik
 from gsik.errors import choices
 from gsik.anim.motion import Motion
+from gsik.anim.scenario_run import QUIET_FRAMES, SETTLED
 from gsik.io.pose import Pose, PoseRead, read_pose, write_pose
 from gsik.targets import Target
 from gsik.rotations import matrix_from_axis_angle
@@ -55,7 +56,7 @@ class Document:
         events: What changed (see :class:`gsik_studio.model.events.DocumentEvents`).
         last_result: The last solver step's result (None after the pose was replaced).
         last_solve_time: How long the last solver step took [s].
-        needs_solving: True while more solver steps would move the pose.
+        needs_solving: True until a step converges or QUIET_FRAMES steps in a row settle (as ``gsik scenarios``).
     """
 
     #: Effectors whose targets start position-only: the biped's arms have no
@@ -386,8 +387,12 @@ class Document:
         result = self.solver.step()
         self.last_solve_time = time.perf_counter() - t0
         self.last_result = result
-        self.needs_solving = result.status is gsik.Status.BUDGET_EXHAUSTED
+        settled = self._quiet + 1 if result.status in SETTLED else 0
+        self._quiet = QUIET_FRAMES if result.status is gsik.Status.CONVERGED else settled
         return result
+
+    needs_solving = property(lambda self: self._quiet < QUIET_FRAMES,
+                             lambda self, needed: setattr(self, "_quiet", 0 if needed else QUIET_FRAMES))
 
     def configure(self, **changes) -> None:
         """Change solver settings (validated by gsik; :class:`gsik.SolverError` on a bad value)."""

@@ -80,7 +80,11 @@ class ScenarioReport(NamedTuple):
         return errors_by_effector(self)
 
 
-_SETTLED = (Status.CONVERGED, Status.STALLED)
+#: Step statuses that count as settled (nothing more to gain from stepping).
+SETTLED = (Status.CONVERGED, Status.STALLED)
+#: Settled steps in a row after which a run counts as settled: one stalled step (a refused step while the
+#: damping adapts) can be followed by progress, so a single one is not the end. The studio uses the same rule.
+QUIET_FRAMES = 10
 #: "Visually there": every effector within 1 mm and 1 degree of its target.
 REACH_TOLERANCE = (1e-3, math.radians(1.0))
 
@@ -91,7 +95,7 @@ def run_scenario(
     *,
     max_frames: int = 600,
     hold_frames: int = 60,
-    quiet_frames: int = 10,
+    quiet_frames: int = QUIET_FRAMES,
     progress: Callable[[int, int], None] | None = None,
     **overrides,
 ) -> ScenarioReport:
@@ -175,7 +179,7 @@ class _Watch:
         if self.reached_at is None and result.max_position_error <= REACH_TOLERANCE[0] \
                 and result.max_orientation_error <= REACH_TOLERANCE[1]:
             self.reached_at = i
-        self.quiet = self.quiet + 1 if result.status in _SETTLED else 0
+        self.quiet = self.quiet + 1 if result.status in SETTLED else 0
         if self.quiet == self.quiet_frames:
             self.settled_at = self.hold_from = i - self.quiet_frames + 1
         elif i - self.last_change + 1 >= self.max_frames:

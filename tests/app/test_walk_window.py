@@ -12,7 +12,7 @@ import pytest
 
 pytestmark = pytest.mark.gui
 
-from test_window import boxes, window  # noqa: E402,F401 (the window fixtures)
+from test_window import boxes  # noqa: E402,F401 (the window fixture is in conftest.py)
 
 
 def _pelvis(window):
