@@ -67,6 +67,8 @@ ACTIONS: tuple[ActionSpec, ...] = (
                checkable=True),
     ActionSpec("frame", "Frame all", lambda w: w.viewport.frame_all(), "F", "Fit the character in the view"),
     *(ActionSpec(f"view_{n}", n.capitalize(), _view(n), key, f"{n.capitalize()} view") for n, key in VIEW_KEYS),
+    ActionSpec("sticks", "Stick figure", lambda w, on: w.set_body("sticks" if on else "mannequin"), None,
+               "Draw the body as sticks instead of the mannequin", checkable=True),
 )
 
 #: Menus: (title, entries); an entry names an action or a submenu, None is a separator.
@@ -74,7 +76,7 @@ MENUS = (
     ("&File", ("new", "open", "recent", None, "save", "save_as", None, "screenshot", None, "quit")),
     ("&Edit", ("undo", "redo")),
     ("&Pose", ("root_left", "root_right", None, "reset", "random", "mirror_lr", "mirror_rl", "walk", "scenarios")),
-    ("&View", ("frame", *(f"view_{n}" for n, _ in VIEW_KEYS))),
+    ("&View", ("frame", *(f"view_{n}" for n, _ in VIEW_KEYS), None, "sticks")),
     ("&Solver", ("pause",)),
 )
 

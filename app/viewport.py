@@ -88,6 +88,7 @@ class Viewport:
     Attributes:
         selection_changed: Signal(name or None) when a target is selected.
         drag_finished: Signal(name) when a target gizmo drag ends.
+        layers: More drawings (the body, balance): each one's ``refresh(P, R)`` runs in :meth:`refresh`.
     """
 
     def __init__(self, plotter: pv.Plotter, doc: Document):
@@ -104,6 +105,7 @@ class Viewport:
         self._sites = tuple(sk.effector_sites)
         self._site_frames = np.array([sk.frame_of(n) for n in self._sites])
         self._limit_state: np.ndarray | None = None
+        self.layers: list = []
         self._build()
         self.refresh()
         self.sync_targets()
@@ -364,6 +366,8 @@ class Viewport:
         M[:3, :3] = R[f]
         M[:3, 3] = P[f]
         self.actors["root"].user_matrix = M
+        for layer in self.layers:
+            layer.refresh(P, R)
 
     def sync_targets(self) -> None:
         """Move the target widgets to the document's targets (no callbacks fire)."""

@@ -50,6 +50,7 @@ class MainWindow(QtWidgets.QMainWindow):
         import pyvista as pv
         from pyvistaqt import QtInteractor
 
+        from gsik_studio.body_view import BodyView
         from gsik_studio.viewport import Viewport
 
         pv.global_theme.multi_samples = 0  # software GL: multisampling costs 3-5x
@@ -62,6 +63,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plotter.installEventFilter(self)  # VTK's own key bindings ('e', 'q', 'w', ...) are not wanted
         self.setCentralWidget(self.plotter)
         self.viewport = Viewport(self.plotter, self.doc)
+        self.body = BodyView(self.viewport)
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
                                  self._show_opened)
         self._make_actions()
@@ -252,6 +254,13 @@ class MainWindow(QtWidgets.QMainWindow):
         if paused:
             self.timer.stop()
         self.loop.set_paused(paused)
+
+    def set_body(self, mode: str) -> None:
+        """Draw the body as ``"mannequin"`` or ``"sticks"``."""
+        self.body.set_mode(mode)
+        with QtCore.QSignalBlocker(self.act_sticks):
+            self.act_sticks.setChecked(mode == "sticks")
+        self.viewport.render()
 
     def set_view(self, name: str) -> None:
         self.viewport.set_view(name)

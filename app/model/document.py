@@ -307,11 +307,11 @@ class Document:
         check_pose(self.skeleton, pose)
         self._edit(text, lambda: self._restore(pose))
 
-    def set_angles(self, q, text: str = "Set angles", snap_targets: bool = True) -> None:
+    def set_angles(self, q, text: str = "Set angles", snap_targets: bool = True, drag: object | None = None) -> None:
         """New joint angles (n_dofs,) [rad] (clamped into the limits), the root staying pinned.
 
         With ``snap_targets`` the targets move onto the new effector poses,
-        so the pose holds.
+        so the pose holds. Calls with one ``drag`` token merge into one undo step.
         """
         q = np.clip(self.skeleton.validate_q(q), self.skeleton.lower, self.skeleton.upper)
 
@@ -321,7 +321,7 @@ class Document:
                 self._targets = self._snapped_targets()
             self._push_targets()
 
-        self._edit(text, apply)
+        self._edit(text, apply, None if drag is None else ("angles", text, drag))
 
     def reset(self) -> None:
         """Back to the standing pose on the default root; effector flags are kept."""
