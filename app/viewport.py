@@ -67,7 +67,7 @@ VIEWS = {
 }
 
 
-def _ring_and_stick(axis: np.ndarray) -> np.ndarray:
+def ring_and_stick(axis: np.ndarray) -> np.ndarray:
     """(RING_POINTS + 2, 3) points of a ring around ``axis`` and a stick along it, in the DOF's frame."""
     a = axis / np.linalg.norm(axis)
     u = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
@@ -151,7 +151,7 @@ class Viewport:
 
         # DOF gizmos: a ring + stick per DOF in its own frame, axis-coloured.
         self._dof_frames = np.asarray(sk.dof_frame)
-        local = np.stack([_ring_and_stick(np.asarray(sk.frame_axis[f])) for f in self._dof_frames])
+        local = np.stack([ring_and_stick(np.asarray(sk.frame_axis[f])) for f in self._dof_frames])
         self._gizmo_local = local  # (n_dofs, K, 3)
         K = local.shape[1]
         cells = []

@@ -22,9 +22,11 @@ from gsik_studio import animations
 from gsik_studio.actions import VIEW_KEYS, make_actions, make_menus, make_toolbar
 from gsik_studio.files import FileActions
 from gsik_studio.model import Document, FrameLoop, Playback
+from gsik_studio.model.joints import JointEditor
 from gsik_studio.qt_compat import protect_none
 from gsik_studio.widgets import nice
 from gsik_studio.widgets.effectors import EffectorsPanel
+from gsik_studio.widgets.joint_panel import JointPanel
 from gsik_studio.widgets.selected import SelectedTargetPanel
 from gsik_studio.widgets.solver_panel import solver_panel
 from gsik_studio.widgets.status import StatusReadouts
@@ -51,6 +53,7 @@ class MainWindow(QtWidgets.QMainWindow):
         from pyvistaqt import QtInteractor
 
         from gsik_studio.body_view import BodyView
+        from gsik_studio.joint_rings import JointRings
         from gsik_studio.viewport import Viewport
 
         pv.global_theme.multi_samples = 0  # software GL: multisampling costs 3-5x
@@ -64,6 +67,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setCentralWidget(self.plotter)
         self.viewport = Viewport(self.plotter, self.doc)
         self.body = BodyView(self.viewport)
+        self.joints = JointEditor(self.doc)
+        self.rings = JointRings(self.viewport, self.joints)
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
                                  self._show_opened)
         self._make_actions()
@@ -102,10 +107,11 @@ class MainWindow(QtWidgets.QMainWindow):
         layout.setSpacing(10)
         self.effectors = EffectorsPanel(self.doc, self.viewport.select)
         self.selected = SelectedTargetPanel(self.doc, lambda: self.viewport.selected)
+        self.joint_panel = JointPanel(self.joints)
         self.solver_panel = solver_panel(self.doc, self.settings)
         self.solver_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
         self.solver_panel.restore()
-        for box in (self.effectors, self.selected, self.solver_panel):
+        for box in (self.effectors, self.selected, self.joint_panel, self.solver_panel):
             layout.addWidget(box)
         layout.addStretch(1)
         scroll = QtWidgets.QScrollArea()
@@ -129,6 +135,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.loop.events.wake.connect(self._start_timer)
         self.loop.events.frame.connect(self._show_frame)
         self.loop.events.readouts.connect(self.effectors.show_errors)
+        self.loop.events.readouts.connect(self.joint_panel.show_angles)
+        ev.pose.connect(self.joint_panel.show_angles)
+        self.joints.selection_changed.connect(lambda _name: self.viewport.render())
         self.loop.events.message.connect(lambda text: self.statusBar().showMessage(text, 8000))
         self.viewport.selection_changed.connect(self._show_selection)
         self.viewport.drag_finished.connect(lambda _name: self._show_history())
