@@ -2,7 +2,7 @@
 
 Everything else about the package is in pyproject.toml. numba keys its cache on the source's content, the numba
 version and the CPU, so the kernels compiled here (the build runs on the installing machine) are loaded at the first
-start from ``gsik/__pycache__``; anywhere they do not match, numba compiles them as usual.
+start from the ``__pycache__`` folders in ``gsik/``; anywhere they do not match, numba compiles them as usual.
 """
 
 import os

@@ -1,10 +1,10 @@
 """numba's ``njit`` with a cache that works wherever gsik is installed, else a no-op decorator.
 
 Kernels are compiled once and cached on disk. The cache goes, in numba's order, to ``$NUMBA_CACHE_DIR``, beside the
-package (``gsik/__pycache__``, where a regular install already holds kernels compiled while it was built: see
-``setup.py``), or under the user's home. When none of those can be written (a read-only install run by a service
-account without a home), gsik caches in the temporary folder instead, and when even that fails it compiles without a
-cache; either way it says so once, as a :class:`KernelCacheWarning`.
+package (the ``__pycache__`` folders in ``gsik/``, where a regular install already holds kernels compiled while it
+was built: see ``setup.py``), or under the user's home. When none of those can be written (a read-only install run
+by a service account without a home), gsik caches in the temporary folder instead, and when even that fails it
+compiles without a cache; either way it says so once, as a :class:`KernelCacheWarning`.
 
 Without numba (or with ``NUMBA_DISABLE_JIT=1``) the kernels run as plain Python: the same results, far slower.
 """
@@ -66,7 +66,8 @@ if _numba_njit is not None:
 
 
 def njit(*args, **kwargs):
-    """``numba.njit`` (same arguments); ``cache=True`` falls back to no cache, with one warning, if none can be written."""
+    """``numba.njit`` (same arguments); ``cache=True`` falls back to no cache, with one warning, where none can be
+    written."""
     if _numba_njit is None:  # pragma: no cover - exercised only without numba
         if len(args) == 1 and callable(args[0]) and not kwargs:
             return args[0]

@@ -1,8 +1,8 @@
 """Compile (and cache) every numba kernel gsik runs, by calling the public API once.
 
 ``python -m gsik._warmup`` is what a regular install runs while the package is built (``setup.py``), so that the
-first start after ``pip install`` loads compiled kernels from ``gsik/__pycache__`` instead of compiling for tens of
-seconds. Running it again only loads the cache.
+first start after ``pip install`` loads compiled kernels from the package's ``__pycache__`` folders instead of
+compiling for tens of seconds. Running it again only loads the cache.
 """
 
 from __future__ import annotations

@@ -67,6 +67,8 @@ def name(value, what: str, error: ErrorType) -> str:
 
 def vector(value, n: int, what: str, error: ErrorType) -> tuple[float, ...]:
     """``value`` as a tuple of ``n`` finite floats."""
+    if _plain_floats(value, n):  # the common case (pose files, drags), without NumPy
+        return tuple(value)
     try:
         v = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
@@ -76,6 +78,12 @@ def vector(value, n: int, what: str, error: ErrorType) -> tuple[float, ...]:
     if not np.all(np.isfinite(v)):
         raise error(f"{what} must be finite, got {value!r}")
     return tuple(float(x) for x in v)
+
+
+def _plain_floats(value, n: int) -> bool:
+    """True for a tuple or list of ``n`` finite Python floats."""
+    return (isinstance(value, (tuple, list)) and len(value) == n
+            and all(type(v) is float and math.isfinite(v) for v in value))
 
 
 def finite_array(value, shape: tuple[int, ...], what: str, error: ErrorType) -> np.ndarray:

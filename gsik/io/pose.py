@@ -55,6 +55,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import yaml
 
+from gsik import validate
 from gsik.errors import PoseError, choices
 from gsik.io.files import atomic_write_text, read_text
 from gsik.rotations import matrix_from_quaternion, transform
@@ -76,23 +77,7 @@ _TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only")
 
 
 def _floats(value, n: int, what: str) -> tuple[float, ...]:
-    if _plain_floats(value, n):  # the common case, without NumPy
-        return tuple(value)
-    try:
-        a = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise PoseError(f"{what} must be {n} numbers, got {value!r}") from None
-    if a.shape != (n,):
-        raise PoseError(f"{what} must be {n} numbers, got {value!r}")
-    if not np.all(np.isfinite(a)):
-        raise PoseError(f"{what} must be finite, got {a.tolist()}")
-    return tuple(float(v) for v in a)
-
-
-def _plain_floats(value, n: int) -> bool:
-    """True for a tuple or list of ``n`` finite Python floats."""
-    return (isinstance(value, (tuple, list)) and len(value) == n
-            and all(type(v) is float and math.isfinite(v) for v in value))
+    return validate.vector(value, n, what, PoseError)
 
 
 def _unit_quaternion(value, what: str) -> tuple[float, float, float, float]:
