@@ -264,3 +264,18 @@ def report(repeats: int = 3000, frames: int = 600, problems: int = 1000,
               f"| {100 * r.success:.1f}% | {100 * r.first_attempt:.1f}% | {r.median_ms:.1f} ms | {r.p90_ms:.1f} ms | "
               f"{r.mean_attempts:.2f} |"]
     return "\n".join(lines)
+
+
+#: The effectors held at priority 0 while a hand is pulled out of reach (issue 8's measure).
+HELD_AT_LEVEL_0 = ("pelvis", "head", "left_foot")
+
+
+def hand_pull_targets(solver: Solver, offset, hand_priority: int) -> dict[str, Target]:
+    """Pelvis, head and left foot held where they stand (priority 0); the left hand's target moved by
+    ``offset`` (3,) [m] at ``hand_priority`` (0: today's single level)."""
+    poses = solver.effector_poses()
+    targets = {n: Target.from_transform(poses[n]) for n in HELD_AT_LEVEL_0}
+    hand = poses["left_hand"].copy()
+    hand[:3, 3] += offset
+    targets["left_hand"] = Target.from_transform(hand).replace(priority=hand_priority)
+    return targets

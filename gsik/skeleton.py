@@ -24,12 +24,13 @@ that sign, so ``q``, ``lower`` and ``upper`` never change on a root switch.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
 
+from gsik.balance import MassModel, mass_model
 from gsik.errors import SkeletonError, choices
 # The raw specs live with their builder; they are part of this module's API.
 from gsik.skeleton_builder import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, SkeletonBuilder
@@ -65,6 +66,11 @@ class Skeleton:
         segment_names: (n_segments,) names of the rigid segments.
         bone_frames: (n_bones, 2) frame indices of each drawn bone's ends.
         bone_segment: (n_bones,) segment index of each bone.
+        segment_mass: (n_segments,) [kg] mass of each segment (0: none).
+        segment_com: (n_segments,) where each segment's centre of mass lies
+            along its first bone (0 at its start, 1 at its first end).
+        soles: ``{site: corners (c, 2) [m]}`` of the feet's soles in their
+            site frame's x-y plane (what balance stands on).
     """
 
     name: str
@@ -90,6 +96,9 @@ class Skeleton:
     segment_names: tuple[str, ...]
     bone_frames: np.ndarray
     bone_segment: np.ndarray
+    segment_mass: np.ndarray
+    segment_com: np.ndarray
+    soles: Mapping[str, np.ndarray]
     source: str = field(default="<memory>", compare=False)
 
     # -- sizes ---------------------------------------------------------------
@@ -109,6 +118,31 @@ class Skeleton:
     def effector_names(self) -> tuple[str, ...]:
         """The end-effectors for the current root: every effector site but the root."""
         return tuple(n for n in self.effector_sites if n != self.root)
+
+    @property
+    def target_names(self) -> tuple[str, ...]:
+        """Every name a target may aim at: the joints (their end frames) and the sites."""
+        return self.joint_names + self.site_names
+
+    @property
+    def total_mass(self) -> float:
+        """The body's mass [kg] (0 when the skeleton gives no segment masses)."""
+        return float(self.segment_mass.sum())
+
+    @cached_property
+    def mass_model(self) -> MassModel:
+        """Where the mass sits (:class:`gsik.balance.MassModel`), from the segments' masses at rest.
+
+        Raises:
+            SkeletonError: if a segment with mass is not fixed in one joint's frame.
+        """
+        from gsik.kinematics import world_frames
+
+        R, p = world_frames(self, self.rest)
+        try:
+            return mass_model(self, self.segment_mass, self.segment_com, R, p)
+        except SkeletonError as exc:
+            raise SkeletonError(f"{self.source}: {exc}") from None
 
     # -- lookups -------------------------------------------------------------
     @cached_property
@@ -208,7 +242,8 @@ def build_skeleton(
         SkeletonError: naming ``source``, the item and the bad value for
             duplicate names, unknown parents, cycles, several tops, limits
             with ``lower > upper``, non-finite numbers, zero axes, unknown
-            effectors, segment ends or root.
+            effectors, segment ends or root, negative masses, segments with
+            mass that span a moving joint, soles without area.
     """
     b = SkeletonBuilder(source)
     b.index_joints(joints)
@@ -220,7 +255,10 @@ def build_skeleton(
     b.add_segments(segments)
     b.set_effectors(effectors)
     b.set_root(root)
-    return Skeleton(**b.arrays(name))
+    skeleton = Skeleton(**b.arrays(name))
+    if skeleton.total_mass > 0.0:
+        skeleton.mass_model  # every segment with a mass must be fixed in one frame: checked here, once
+    return skeleton
 
 
 __all__ = ["AXES", "JointSpec", "RotationSpec", "SegmentSpec", "SiteSpec", "Skeleton", "build_skeleton"]

@@ -6,13 +6,16 @@ Use :func:`gsik.build_skeleton`; this module holds its steps (ozz-animation's ra
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
 
+from gsik.balance import convex_hull
 from gsik.errors import SkeletonError, choices
 from gsik.rotations import is_rotation_matrix
 from gsik.validate import frozen, vector
@@ -68,21 +71,33 @@ class SiteSpec:
         parent: The joint it is fixed to.
         offset: Position (3,) [m] in the parent joint's frame.
         orientation: Fixed rotation (3, 3) in the parent joint's frame, or ``None``.
+        sole: For a foot, the corners ``((x, y), ...)`` [m] of its sole in the
+            site frame's x-y plane (at least 3; their convex hull is the
+            support polygon balance uses), or ``None``.
     """
 
     name: str
     parent: str
     offset: tuple[float, float, float]
     orientation: tuple | None = None
+    sole: tuple | None = None
 
 
 @dataclass(frozen=True)
 class SegmentSpec:
-    """A rigid segment, drawn as bones from one joint or site to one or more others."""
+    """A rigid segment, drawn as bones from one joint or site to one or more others.
+
+    Attributes:
+        mass: [kg] (>= 0; 0 for a segment without mass, the default).
+        com: Where its centre of mass lies along its first bone: 0 at
+            ``start``, 1 at the first end.
+    """
 
     name: str
     start: str
     ends: tuple[str, ...]
+    mass: float = 0.0
+    com: float = 0.5
 
 
 def _axis_label(axis, k: int) -> str:
@@ -152,6 +167,9 @@ class SkeletonBuilder:
         self.segment_names: list[str] = []
         self.bones: list[tuple[int, int]] = []
         self.bone_segment: list[int] = []
+        self.segment_mass: list[float] = []
+        self.segment_com: list[float] = []
+        self.soles: dict[str, np.ndarray] = {}
         self.effectors: tuple[str, ...] = ()
         self.root = ""
 
@@ -253,8 +271,23 @@ class SkeletonBuilder:
             self.site_frame.append(_add(self.frames, _FrameRow(
                 s.name, self.joint_frame[s.parent], _vector(s.offset, f"site {s.name!r} offset"),
                 _orientation(s.orientation, f"site {s.name!r} orientation"))))
+            if s.sole is not None:
+                self.soles[s.name] = self.check_sole(s)
         self.index = {row.name: i for i, row in enumerate(self.frames)}
         self.index.update(self.joint_frame)
+
+    def check_sole(self, s: SiteSpec) -> np.ndarray:
+        """A site's sole: at least 3 finite (x, y) corners spanning an area."""
+        try:
+            sole = np.array(s.sole, dtype=float)
+        except (TypeError, ValueError):
+            sole = np.zeros((0, 0))
+        if sole.ndim != 2 or sole.shape[1] != 2 or len(sole) < 3 or not np.all(np.isfinite(sole)):
+            self.fail(f"site {s.name!r}: sole must be at least 3 finite [x, y] corners [m], got {s.sole!r}")
+        if len(convex_hull(sole)) < 3:
+            self.fail(f"site {s.name!r}: sole corners {s.sole!r} lie on one line (no area)")
+        sole.flags.writeable = False
+        return sole
 
     def add_segments(self, segments: Sequence[SegmentSpec]) -> None:
         """Bones (start frame, end frame) of each segment; every end a joint or site."""
@@ -271,6 +304,12 @@ class SkeletonBuilder:
             for end in seg.ends:
                 self.bones.append((self.index[seg.start], self.index[end]))
                 self.bone_segment.append(len(seg_index))
+            mass, com = float(seg.mass), float(seg.com)
+            if not (math.isfinite(mass) and mass >= 0.0 and math.isfinite(com)):
+                self.fail(f"segment {seg.name!r}: mass must be finite and >= 0 [kg] and com a finite fraction, "
+                          f"got mass={seg.mass!r}, com={seg.com!r}")
+            self.segment_mass.append(mass)
+            self.segment_com.append(com)
             seg_index[seg.name] = len(seg_index)
         self.segment_names = list(seg_index)
 
@@ -322,5 +361,8 @@ class SkeletonBuilder:
             segment_names=tuple(self.segment_names),
             bone_frames=frozen(np.reshape(self.bones, (-1, 2)), np.int64),
             bone_segment=frozen(self.bone_segment, np.int64),
+            segment_mass=frozen(self.segment_mass),
+            segment_com=frozen(self.segment_com),
+            soles=MappingProxyType(dict(self.soles)),
             source=self.source,
         )

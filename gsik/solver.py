@@ -16,7 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik import kernels
+from gsik import control, kernels
+from gsik.balance import center_of_mass
 from gsik.errors import SolverError, TargetError, choices
 from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
 from gsik.kernels import step as step_kernels
@@ -143,6 +144,10 @@ class Solver:
             world_from_root = transform(R[f], p[f])
         self._W = self._check_world_from_root(world_from_root)
         self._targets: dict[str, Target] = {}
+        self._posture: control.Posture | None = None
+        self._balance = False
+        self._controller: control.Controller | None = None  # None: to be made (or retargeted) before use
+        self._last_controller: control.Controller | None = None
         self._set_topology(skeleton.root, q, self._settings.damping)
 
     # -- construction helpers -------------------------------------------------
@@ -192,6 +197,8 @@ class Solver:
         forward_kinematics(self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
 
     def _pack_targets(self) -> None:
+        self._controller = None
+        self._is_controlled = self._posture is not None or self._balance or self._controlled_targets()
         ow = self._settings.orientation_weight
         tp, tR, row_w = self._packed
         row_w[:] = 0.0
@@ -231,6 +238,12 @@ class Solver:
     def effector_names(self) -> tuple[str, ...]:
         """The effectors for the current root: every effector site but the root."""
         return self._topo.effector_names
+
+    @property
+    def target_names(self) -> tuple[str, ...]:
+        """Every name a target may aim at: the effectors first, then the other joints and sites (not the root)."""
+        rest = (n for n in self._skeleton.target_names if n not in self._topo.effector_names and n != self.root)
+        return self._topo.effector_names + tuple(rest)
 
     @property
     def world_from_root(self) -> np.ndarray:
@@ -306,14 +319,20 @@ class Solver:
         self._targets.update(checked)
         self._pack_targets()
 
+    @property
+    def _target_frames(self) -> frozenset:
+        return frozenset(self._skeleton.target_names)
+
     def _check_targets(self, targets: Mapping[str, Target | None]) -> dict[str, Target]:
         if not isinstance(targets, Mapping):
             raise TargetError(f"targets must be a mapping of effector name to Target, got {type(targets).__name__}")
         out = {}
         for name, t in targets.items():
-            if name not in self._topo.effector_names:
+            if name not in self._topo.effector_names and (name == self.root or name not in self._target_frames):
                 extra = f" ({name!r} is the IK root)" if name == self.root else ""
-                raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}")
+                others = [n for n in self.target_names if n not in self._topo.effector_names]
+                raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}; "
+                                  f"other joints and sites: {choices(others)}")
             if t is None:
                 continue
             if not isinstance(t, Target):
@@ -330,6 +349,8 @@ class Solver:
         """
         if targets is not None:
             self.set_targets(targets)
+        if self._is_controlled:
+            return self._control_step()
         step, inputs = self._inputs or self._kernel_inputs()
         step(*inputs)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
@@ -358,7 +379,12 @@ class Solver:
         first a continuation (the targets approached in stages from the
         current effector poses), then random restarts inside the limits.
         The best attempt (lowest weighted error) is kept and becomes the
-        solver's state.
+        solver's state. With priorities, posture or balance each attempt runs
+        prioritised steps until the pose holds (:mod:`gsik.control`),
+        attempts are compared level by level, and the first further attempt
+        starts from the posture; a converged attempt whose posture is not met
+        is compared with one from the posture too, as the targets may be met
+        on another branch nearer to it.
         """
         if targets is not None:
             self.set_targets(targets)
@@ -370,35 +396,61 @@ class Solver:
         attempts = 1
         if stats[O_STATUS] != Status.CONVERGED and s.restarts > 0:
             stats, attempts = self._restart(start, stats)
+        elif s.restarts > 0 and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0:
+            stats, attempts = self._posture_attempt(stats)
         self._ws.x[:] = 0.0
         self._ws.lam[0] = s.damping
+        if self._is_controlled:
+            return self._control_result(_STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
+                                        float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
         return self._result(stats, O_COST, attempts)
 
     def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
         """Further attempts after a failed first one; leaves the best attempt as the state."""
         s = self._settings
         sk = self._skeleton
-        best = (stats[O_COST], self._q.copy(), stats)
+        best = (self._attempt_rank(stats), self._q.copy(), stats)
         rng = np.random.default_rng(s.seed)
         attempts = 1
         while stats[O_STATUS] != Status.CONVERGED and attempts <= s.restarts:
-            if attempts == 1:
+            if attempts == 1 and self._posture is not None:
+                stats = self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
+            elif attempts == 1:
                 stats = self._solve_by_continuation(start)
             else:
                 # Random restarts: ever bolder blends of the start with a random pose within the limits.
                 alpha = min(1.0, 0.25 * attempts)
                 stats = self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
             attempts += 1
-            if stats[O_STATUS] == Status.CONVERGED or stats[O_COST] < best[0]:
-                best = (stats[O_COST], self._q.copy(), stats)
+            rank = self._attempt_rank(stats)
+            if stats[O_STATUS] == Status.CONVERGED or rank < best[0]:
+                best = (rank, self._q.copy(), stats)
         if best[2] is not stats:
             # An earlier attempt was best: make it the state again (frames and errors included).
             self._solve_from(best[1], iterations=0)
         return best[2], attempts
 
+    def _posture_attempt(self, stats: np.ndarray) -> tuple[np.ndarray, int]:
+        """A second attempt from the posture after a converged first one; the better one stays the state."""
+        first = (self._attempt_rank(stats), self._q.copy(), stats)
+        second = self._solve_from(self._posture.reference)
+        if second[O_STATUS] == Status.CONVERGED and self._attempt_rank(second) < first[0]:
+            return second, 2
+        self._solve_from(first[1], iterations=0)
+        return first[2], 2
+
+    def _attempt_rank(self, stats: np.ndarray) -> tuple:
+        """How good the attempt that just ended is (lower is better): its weighted error, or with
+        priorities its levels' errors in order, so no attempt is preferred for a lower level's sake."""
+        if self._is_controlled:
+            return self._make_controller().rank(self._q, self._ws.R, self._ws.p)
+        return (float(stats[O_COST]),)
+
     def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
         """One Levenberg-Marquardt attempt from ``q0``; returns a copy of its statistics."""
         s = self._settings
+        if self._is_controlled:
+            return self._control_solve(q0, s.max_iterations if iterations is None else iterations)
         self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
         step_kernels.solve(self._model, s.kernel_settings(sweeps=s.solve_sweeps), self._packed,
                            self._topo.root_frame, self._W, self._q, s.max_iterations if iterations is None else iterations,
@@ -450,3 +502,138 @@ class Solver:
             self._targets[old] = Target.from_transform(old_pose)
             self._pack_targets()
         self._ws.x[:] = 0.0
+
+    # -- artist control: priorities, targets on any frame, posture, balance ------------------
+    def set_posture(self, q=None, weights=1.0) -> None:
+        """Prefer the pose ``q`` (n_dofs,) [rad] (default: the rest pose), below every target.
+
+        The posture is the lowest priority level: it only chooses among the
+        poses that meet the targets as well as they can be met, so it never
+        costs target accuracy. ``weights``: a scalar or one per DOF (n_dofs,)
+        (>= 0; 0 turns the posture off), or a symmetric positive semi-definite
+        precision matrix (n_dofs, n_dofs); the posture minimises
+        ``(q - q_ref)^T P (q - q_ref)`` with ``P = diag(weights)`` or that matrix.
+        """
+        sk = self._skeleton
+        ref = sk.rest.copy() if q is None else np.clip(sk.validate_q(q), sk.lower, sk.upper)
+        P = _posture_precision(weights, sk.n_dofs)
+        self._posture = None if not np.any(P) else control.Posture(ref, P)
+        self._pack_targets()
+
+    @property
+    def posture(self) -> control.Posture | None:
+        """The preferred posture (reference (n_dofs,) [rad], precision), or ``None`` when off."""
+        return self._posture
+
+    def set_balance(self, on: bool = True) -> None:
+        """Hold the centre of mass's ground projection over the support polygon (or stop).
+
+        The support is the root foot's sole, and the sole of every other foot
+        whose target lies on the ground (the root foot's height, within 1 cm):
+        the convex hull of both feet when the free foot is planted. Balance
+        ranks below the targets of priority 0 and above those of priority 1
+        (:data:`gsik.control.BALANCE_PRIORITY`): a hand pulled at priority 1
+        cannot tip the body over.
+
+        Raises:
+            SolverError: if the skeleton gives no segment masses.
+        """
+        if on:
+            self._mass_model()
+        self._balance = bool(on)
+        self._pack_targets()
+
+    @property
+    def balance(self) -> bool:
+        """True while balance is on."""
+        return self._balance
+
+    def center_of_mass(self) -> np.ndarray:
+        """The centre of mass (3,) in the world [m] at the current angles.
+
+        Raises:
+            SolverError: if the skeleton gives no segment masses.
+        """
+        return center_of_mass(self._mass_model(), self._ws.R, self._ws.p)
+
+    def _mass_model(self):
+        if self._skeleton.total_mass <= 0.0:
+            raise SolverError(f"the centre of mass needs segment masses; skeleton {self._skeleton.name!r} gives "
+                              "none (see skeletons/README.md: segments' mass)")
+        return self._skeleton.mass_model
+
+    def _controlled_targets(self) -> bool:
+        """True if the targets need the prioritised path: several levels, or a target off the effectors."""
+        levels = {t.priority for t in self._targets.values()}
+        return len(levels) > 1 or any(n not in self._topo.effector_names for n in self._targets)
+
+    def _make_controller(self) -> control.Controller:
+        """The controller for the current targets: the last one retargeted if only their values changed."""
+        if self._controller is None:
+            sk = self._skeleton
+            tasks = control.frame_tasks(sk, self._targets, self._settings.orientation_weight)
+            balance = control.support(sk, self._targets, self._ws.p) if self._balance else None
+            last = self._last_controller
+            if last is not None and last.key == control.structure(sk, tasks, self._posture, balance, self._settings):
+                last.retarget(tasks)
+            else:
+                last = control.Controller(sk, tasks, self._posture, balance, self._settings)
+            self._controller = self._last_controller = last
+        return self._controller
+
+    def _control_step(self) -> SolveResult:
+        st = self._make_controller().step(self._q, self._W, self._ws.R, self._ws.p, self._ws.lam)
+        status = Status.CONVERGED if st.converged else Status.STALLED if st.held else Status.BUDGET_EXHAUSTED
+        return self._control_result(status, 1, st.cost, st.step_norm, 1)
+
+    def _control_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
+        """One attempt of prioritised steps from ``q0`` until the pose holds; statistics as the kernel's solve."""
+        c = self._make_controller()
+        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
+        self._refresh_frames()
+        lam = np.array([self._settings.damping])
+        settles = self._posture is not None or self._balance  # keep going after convergence until they hold
+        st = None
+        it = 0
+        for it in range(1, iterations + 1):
+            st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
+            if st.held or (st.converged and not settles):
+                break
+        stats = np.zeros(kernels.N_STATS)
+        converged = c.converged(self._ws.R, self._ws.p)
+        stats[O_STATUS] = (Status.CONVERGED if converged else Status.STALLED if st is not None and st.held
+                                    else Status.BUDGET_EXHAUSTED)
+        stats[O_ITERATIONS] = it if iterations else 0
+        stats[O_COST] = c.target_cost(self._ws.R, self._ws.p)
+        stats[O_STEP_NORM] = 0.0 if st is None else st.step_norm
+        return stats
+
+    def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
+                        attempts: int) -> SolveResult:
+        """A result naming every effector, then the other targeted frames, with their errors."""
+        c = self._make_controller()
+        pos, ori = c.errors(self._ws.R, self._ws.p)
+        names = self._topo.effector_names + tuple(n for n in c.names if n not in self._topo.effector_names)
+        where = {n: k for k, n in enumerate(c.names)}
+        out = np.zeros((2, len(names)))
+        for k, n in enumerate(names):
+            if n in where:
+                out[:, k] = pos[where[n]], ori[where[n]]
+        return SolveResult(self._q.copy(), status, iterations, 0, residual, names, out[0], out[1], step_norm, attempts)
+
+
+def _posture_precision(weights, n: int) -> np.ndarray:
+    """Posture weights as a precision: (n,) per DOF, or (n, n); checked."""
+    try:
+        P = np.array(weights, dtype=float)
+    except (TypeError, ValueError):
+        raise SolverError(f"posture weights must be numbers, got {weights!r}") from None
+    if P.ndim == 0:
+        P = np.full(n, float(P))
+    if P.shape not in ((n,), (n, n)) or not np.all(np.isfinite(P)):
+        raise SolverError(f"posture weights must be finite: a scalar, ({n},) or ({n}, {n}), got shape {P.shape}")
+    if P.ndim == 1 and np.any(P < 0):
+        raise SolverError(f"posture weights must be >= 0, got {P[P < 0][0]!r}")
+    if P.ndim == 2 and (not np.allclose(P, P.T) or np.linalg.eigvalsh(P).min() < -1e-9 * max(1.0, abs(P).max())):
+        raise SolverError("posture weights as a matrix must be symmetric positive semi-definite")
+    return P

@@ -20,7 +20,7 @@ QUATERNION_TOLERANCE = ROTATION_TOLERANCE * 100
 #: The identity orientation (w, x, y, z): what a target made without an orientation holds.
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
 # Fields in value order: equality, hashing and replace() all walk this one list.
-_FIELDS = ("position", "orientation", "weight", "position_only", "enabled")
+_FIELDS = ("position", "orientation", "weight", "position_only", "enabled", "priority")
 _PACK3 = struct.Struct("3d").pack
 _PACK9 = struct.Struct("9d").pack
 _EYE = np.frombuffer(_PACK9(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)).reshape(3, 3)
@@ -37,33 +37,37 @@ class Target:
         weight: Relative importance (>= 0) in the weighted least squares.
         position_only: Ignore the orientation (kept, so it can be re-enabled).
         enabled: False leaves the effector free: the solver skips the target.
+        priority: Strict priority level, a whole number >= 0: 0 (the default)
+            is the most important; a target on level k is met only in what
+            the levels above it leave free, so it never moves them. Targets on
+            one level trade off by ``weight``.
 
     Attributes:
         position: Read-only float array (3,) [m].
         orientation: Unit quaternion ``(w, x, y, z)`` as a tuple of 4 floats.
         rotation: The orientation as a read-only rotation matrix (3, 3).
-        weight, position_only, enabled: As given (float, bool, bool).
+        weight, position_only, enabled, priority: As given (float, bool, bool, int).
 
     Raises:
         TargetError: on NaN or infinite values, wrong shapes, a matrix that
-            is not a rotation, a quaternion that is not of unit norm, or a
-            negative weight.
+            is not a rotation, a quaternion that is not of unit norm, a
+            negative weight, or a priority that is not a whole number >= 0.
 
     Targets compare and hash by value (position, orientation, weight,
-    position_only, enabled), so whole poses compare equal.
+    position_only, enabled, priority), so whole poses compare equal.
     """
 
-    __slots__ = ("position", "_orientation", "rotation", "weight", "position_only", "enabled", "_key")
+    __slots__ = ("position", "_orientation", "rotation", "weight", "position_only", "enabled", "priority", "_key")
 
     def __init__(self, position, orientation=None, weight: float = 1.0, position_only: bool = False,
-                 enabled: bool = True):
+                 enabled: bool = True, priority: int = 0):
         if orientation is None:
             q, R, position_only = IDENTITY, _EYE, True
         else:
             q, R = _orientation(orientation)
-        self._fill(_position(position), q, R, weight, position_only, enabled)
+        self._fill(_position(position), q, R, weight, position_only, enabled, priority)
 
-    def _fill(self, p: np.ndarray, q: tuple, R: np.ndarray, weight, position_only, enabled) -> None:
+    def _fill(self, p: np.ndarray, q: tuple, R: np.ndarray, weight, position_only, enabled, priority) -> None:
         _set = object.__setattr__
         _set(self, "position", p)
         _set(self, "_orientation", q)
@@ -71,6 +75,7 @@ class Target:
         _set(self, "weight", _weight(weight))
         _set(self, "position_only", bool(position_only))
         _set(self, "enabled", bool(enabled))
+        _set(self, "priority", priority if type(priority) is int and priority >= 0 else _priority(priority))
         _set(self, "_key", None)
 
     def __setattr__(self, name, value):
@@ -118,13 +123,13 @@ class Target:
 
     @classmethod
     def from_transform(cls, world_from_effector: np.ndarray, weight: float = 1.0, position_only: bool = False,
-                       enabled: bool = True) -> Target:
+                       enabled: bool = True, priority: int = 0) -> Target:
         """A target at a world transform (4, 4); its rotation block becomes :attr:`rotation` as given."""
         T = world_from_effector if type(world_from_effector) is np.ndarray else np.asarray(world_from_effector,
                                                                                               dtype=float)
         if T.shape != (4, 4):
             raise TargetError(f"target transform must have shape (4, 4), got {T.shape}")
-        return cls(T[:3, 3], T[:3, :3], weight, position_only, enabled)
+        return cls(T[:3, 3], T[:3, :3], weight, position_only, enabled, priority)
 
     def replace(self, **changes) -> Target:
         """A copy with some fields changed (validated again; an unchanged orientation keeps its matrix)."""
@@ -137,12 +142,12 @@ class Target:
             return Target(**values)
         new = Target.__new__(Target)  # same orientation: keep its quaternion and matrix
         new._fill(_position(values["position"]), self._orientation, self.rotation, values["weight"],
-                  values["position_only"], values["enabled"])
+                  values["position_only"], values["enabled"], values["priority"])
         return new
 
 
-def _rebuild(position, orientation, weight, position_only, enabled) -> Target:
-    return Target(position, orientation, weight, position_only, enabled)
+def _rebuild(position, orientation, weight, position_only, enabled, priority=0) -> Target:
+    return Target(position, orientation, weight, position_only, enabled, priority)
 
 
 def _position(value) -> np.ndarray:
@@ -163,6 +168,12 @@ def _position(value) -> np.ndarray:
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
         raise TargetError(f"target position must be finite, got {[x, y, z]}")
     return np.frombuffer(_PACK3(x, y, z))  # a fresh read-only float64 array
+
+
+def _priority(value) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise TargetError(f"target priority must be a whole number >= 0 (0 is the most important), got {value!r}")
+    return int(value)
 
 
 def _weight(value) -> float:

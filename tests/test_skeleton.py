@@ -9,7 +9,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gsik
+from gsik.balance import center_of_mass
 from gsik.io.skeleton_yaml import _bundled_dir
+from gsik.kinematics import world_frames
 
 from solver_helpers import random_q
 
@@ -144,8 +146,34 @@ BAD_SKELETONS = {
     "zero axis": (lambda d: _joint(d, "neck")["rotations"][0].update(axis=[0, 0, 0]), "axis must not be zero"),
     "bad quaternion": (lambda d: _joint(d, "neck").update(orientation=[2, 0, 0, 0]), "unit quaternion"),
     "wrong units": (lambda d: d.update(units="cm"), "units must be 'm'"),
+    "negative mass": (lambda d: _segment(d, "head").update(mass=-1.0), "mass must be finite and >= 0"),
+    "mass over a moving joint": (lambda d: d["segments"].append({"name": "leg", "from": "left_hip",
+                                                                 "to": "left_ankle", "mass": 5.0}),
+                                 "segment 'leg' has a mass but its points are not fixed in one joint's frame"),
+    "sole of two corners": (lambda d: _site(d, "left_foot").update(sole=[[0, 0], [1, 0]]),
+                            "sole must be at least 3 finite [x, y] corners"),
+    "sole on a line": (lambda d: _site(d, "left_foot").update(sole=[[0, 0], [1, 0], [2, 0]]), "lie on one line"),
     "future format": (lambda d: d.update(format=99), "format 99 is not supported"),
 }
+
+
+def _segment(d, name):
+    return next(s for s in d["segments"] if s["name"] == name)
+
+
+def _site(d, name):
+    return next(s for s in d["sites"] if s["name"] == name)
+
+
+def test_biped_weighs_73_kg_with_its_centre_of_mass_at_hip_height(biped):
+    assert biped.total_mass == pytest.approx(73.0)
+    assert sorted(biped.soles) == ["left_foot", "right_foot"]
+    c = center_of_mass(biped.mass_model, *world_frames(biped, biped.rest))
+    assert abs(c[0]) < 1e-9 and 0.9 < c[2] < 1.05  # on the mid-plane, about 56% of 1.75 m
+
+
+def test_target_names_are_the_joints_and_sites(biped):
+    assert set(biped.target_names) == set(biped.joint_names) | set(biped.site_names)
 
 
 @pytest.mark.parametrize("case", sorted(BAD_SKELETONS))

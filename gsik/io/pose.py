@@ -20,6 +20,7 @@ A pose file is plain YAML, readable and editable by hand::
         enabled: true           # optional, default true: false leaves the effector free
         weight: 1.0             # optional, default 1.0: relative importance, >= 0
         position_only: false    # optional, default false: true ignores the orientation
+        priority: 0             # optional, default 0: strict priority level (0 the most important)
       # ... one entry per effector
 
 Rules:
@@ -73,7 +74,7 @@ LIMIT_TOLERANCE = 1e-9
 
 _TOP_KEYS = ("format", "skeleton", "root", "root_transform", "joints", "targets")
 _TRANSFORM_KEYS = ("position", "orientation")
-_TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only")
+_TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only", "priority")
 
 
 def _floats(value, n: int, what: str) -> tuple[float, ...]:
@@ -363,12 +364,16 @@ def _read_target(r: _Reader, value, path: tuple) -> Target:
     weight = r.number(t.get("weight", 1.0), path + ("weight",))
     if weight < 0:
         r.fail(path + ("weight",), f"must be >= 0, got {weight!r}")
+    priority = t.get("priority", 0)
+    if isinstance(priority, bool) or not isinstance(priority, int) or priority < 0:
+        r.fail(path + ("priority",), f"must be a whole number >= 0, got {_show(priority)}")
     return Target(
         position=r.vector(t["position"], 3, path + ("position",)),
         orientation=r.quaternion(t["orientation"], path + ("orientation",)),
         weight=weight,
         position_only=r.flag(t.get("position_only", False), path + ("position_only",)),
         enabled=r.flag(t.get("enabled", True), path + ("enabled",)),
+        priority=priority,
     )
 
 
@@ -427,6 +432,8 @@ def pose_to_yaml(pose: Pose) -> str:
             f"    weight: {_num(t.weight)}",
             f"    position_only: {'true' if t.position_only else 'false'}",
         ]
+        if t.priority:  # written only when set: files of single-level poses stay as they were
+            out.append(f"    priority: {t.priority}")
     return "\n".join(out) + "\n"
 
 

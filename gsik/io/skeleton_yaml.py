@@ -188,17 +188,23 @@ def _joint(f: _Fields, i: int) -> JointSpec:
 
 
 def _site(f: _Fields) -> SiteSpec:
-    f.check_keys(("name", "parent", "offset", "orientation"))
-    return SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)), f.orientation())
+    f.check_keys(("name", "parent", "offset", "orientation", "sole"))
+    sole = f.get("sole", None)
+    if sole is not None:
+        if not isinstance(sole, list) or not all(isinstance(c, (list, tuple)) and len(c) == 2 for c in sole):
+            f.fail(f"sole must be a list of [x, y] corners [m], got {sole!r}")
+        sole = tuple((f.number(c[0], "sole x"), f.number(c[1], "sole y")) for c in sole)
+    return SiteSpec(f.name(), f.name("parent"), f.vector("offset", default=(0.0, 0.0, 0.0)), f.orientation(), sole)
 
 
 def _segment(f: _Fields) -> SegmentSpec:
-    f.check_keys(("name", "from", "to"))
+    f.check_keys(("name", "from", "to", "mass", "com"))
     to = f.get("to")
     ends = [to] if isinstance(to, str) else to
     if not isinstance(ends, list) or not ends or not all(isinstance(e, str) and e for e in ends):
         f.fail(f"to must be a joint or site name or a list of them, got {to!r}")
-    return SegmentSpec(f.name(), f.name("from"), tuple(ends))
+    return SegmentSpec(f.name(), f.name("from"), tuple(ends), f.number(f.get("mass", 0.0), "mass"),
+                       f.number(f.get("com", 0.5), "com"))
 
 
 def _list(top: _Fields, key: str) -> list:

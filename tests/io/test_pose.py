@@ -83,6 +83,15 @@ def test_any_finite_numbers_round_trip_bit_for_bit(skeleton, position, weight):
     assert [math.copysign(1, v) for v in again.targets["head"].position] == [math.copysign(1, v) for v in position]
 
 
+def test_target_priorities_round_trip_and_are_checked(skeleton):
+    pose = _pose(skeleton)
+    pose = pose.replace(targets={**pose.targets, "left_hand": pose.targets["left_hand"].replace(priority=2)})
+    text = pose_to_yaml(pose)
+    assert text.count("priority:") == 1  # written only where it is not the default
+    assert pose_from_yaml(text, skeleton).pose.targets["left_hand"].priority == 2
+    assert "must be a whole number >= 0, got -1" in _error(text.replace("priority: 2", "priority: -1"), skeleton)
+
+
 def test_written_file_is_readable_and_documented(text, skeleton):
     assert text.startswith("# gsik pose")
     assert "format: 1\n" in text and "skeleton: biped\n" in text

@@ -1,0 +1,410 @@
+"""Artist control: prioritised steps over targets on any frame, balance and a preferred posture.
+
+:class:`Controller` is what :class:`gsik.Solver` uses when its targets are
+not all on one priority level, aim frames that are not effector sites, or a
+posture or balance is on. One step linearises every task at the current
+angles and solves the levels in strict order (:func:`gsik.priority.prioritized_step`):
+
+1. the targets of priority 0,
+2. balance (when on): the centre of mass over the support polygon,
+3. the targets of priority 1, 2, ... in turn,
+4. the preferred posture (when on).
+
+A step is kept only if it leaves every level no worse, in order: the first
+level it changes by more than ``settle_tolerance`` must improve (a level
+within its tolerances before and after counts as unchanged). Otherwise it is
+halved, then refused and the damping raised (Levenberg-Marquardt, as the fast
+path does), so a held target settles at its best reach instead of jittering.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from gsik.kernels import kinematics as kernels
+from gsik.kernels.step import ADAPTIVE_FLOOR
+from gsik.errors import SolverError
+from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
+    support_polygon
+from gsik.kinematics import kinematic_model, topology
+from gsik.priority import Level, posture_level, prioritized_step
+
+#: Newton steps of the target levels that may bring a posture move back onto them.
+RESTORING_STEPS = 3
+#: Balance sits between the targets of priority 0 and those of priority 1 (arms pulled at 1 cannot tip the body).
+BALANCE_PRIORITY = 0.5
+#: The centre of mass is held this far [m] inside the support polygon's edge ...
+BALANCE_MARGIN = 0.01
+#: ... and pulled back once it comes within this band [m] of that line, so it never chatters across it;
+BALANCE_BAND = 0.005
+#: ... a drift this far [m] past that line (second order, from lower levels' moves) still counts as balanced.
+BALANCE_TOLERANCE = 0.001
+
+
+class FrameTask(NamedTuple):
+    """A target on one frame, packed.
+
+    Attributes:
+        name: The joint or site name.
+        frame: Its frame index.
+        position: (3,) world target position [m].
+        rotation: (3, 3) world target orientation.
+        row_weight: (6,) weights of the 3 position and 3 orientation rows (0: unused).
+        priority: Level; 0 is the most important.
+    """
+
+    name: str
+    frame: int
+    position: np.ndarray
+    rotation: np.ndarray
+    row_weight: np.ndarray
+    priority: int
+
+
+class Balance(NamedTuple):
+    """What balance needs: the mass model and the feet that may carry the body.
+
+    Attributes:
+        mass: The :class:`~gsik.balance.MassModel`.
+        feet: (k,) frame index of each foot that may support the body.
+        soles: k sole polygons (c, 2) [m] in each foot frame's x-y plane.
+    """
+
+    mass: MassModel
+    feet: tuple[int, ...]
+    soles: tuple[np.ndarray, ...]
+
+
+class Posture(NamedTuple):
+    """The preferred pose ``reference`` (n_dofs,) [rad] and its precision: weights (n_dofs,) or (n_dofs, n_dofs)."""
+
+    reference: np.ndarray
+    precision: np.ndarray
+
+
+class ControlStats(NamedTuple):
+    """What a controller step did.
+
+    Attributes:
+        accepted: The step was kept.
+        held: No level would change by more than the settle tolerance: the pose is at rest.
+        converged: Every target is within the position and orientation tolerances.
+        cost: Weighted squared error ``0.5 e^T W e`` of the targets, all levels.
+        step_norm: Size of the change of ``q`` [rad].
+    """
+
+    accepted: bool
+    held: bool
+    converged: bool
+    cost: float
+    step_norm: float
+
+
+class Controller:
+    """Prioritised IK steps for one skeleton seen from one root.
+
+    Args:
+        skeleton: The :class:`gsik.Skeleton` (its ``root`` the IK root).
+        tasks: The targets, each a :class:`FrameTask`.
+        posture: A :class:`Posture`, or ``None``.
+        balance: A :class:`Balance`, or ``None``.
+        settings: The :class:`gsik.SolverSettings`.
+    """
+
+    def __init__(self, skeleton, tasks, posture: Posture | None, balance: Balance | None, settings):
+        self._sk = skeleton
+        self._settings = settings
+        if balance is not None and not balance.feet:
+            balance = None  # no foot on the ground: nothing to stand on
+        self._posture = posture
+        self._balance = balance
+        self._root = skeleton.frame_of(skeleton.root)
+        self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
+        self._tasks = _ordered(tasks)
+        self.key = structure(skeleton, tasks, posture, balance, settings)
+        names = [t.name for t in self._tasks]
+        self.names = tuple(names)
+        self._topo = topology(skeleton, skeleton.root, names)
+        self._task_model = _kinematics(skeleton, self._topo)
+        self._fk_model = _kinematics(skeleton)
+        self.retarget(tasks)
+        priorities = [t.priority for t in self._tasks]
+        if balance is not None:
+            priorities.append(BALANCE_PRIORITY)
+        # Level index of every task row block, and of balance.
+        self._levels = sorted(set(priorities))
+        self._task_level = np.array([self._levels.index(t.priority) for t in self._tasks], dtype=np.int64)
+        self._balance_level = self._levels.index(BALANCE_PRIORITY) if balance is not None else -1
+        m = len(self._tasks)
+        self._J = np.zeros((6 * m, skeleton.n_dofs))
+        self._e = np.zeros(6 * m)
+        self._err = np.zeros((2, m))
+        self._M = np.zeros((3, 3))
+        if balance is not None:
+            bodies = [skeleton.frame_names[f] for f in balance.mass.body_frame]
+            self._mass_kinematics = _kinematics(skeleton, topology(skeleton, skeleton.root, bodies))
+            self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
+
+    def retarget(self, tasks) -> None:
+        """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
+        ordered = _ordered(tasks)
+        self._tp = np.array([t.position for t in ordered]).reshape(-1, 3)
+        self._tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
+        self._row_w = np.array([t.row_weight for t in ordered]).reshape(-1, 6)
+        self._state_cache = None
+
+    # -- evaluation ----------------------------------------------------------
+    def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Position [m] and orientation [rad] error (m,) of each task (0 where a row is unused)."""
+        self._task_errors(R, p)
+        err = self._err.copy()
+        err[0, self._row_w[:, 0] <= 0.0] = 0.0
+        err[1, self._row_w[:, 3] <= 0.0] = 0.0
+        return err[0], err[1]
+
+    def _task_errors(self, R, p) -> None:
+        kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
+                                self._M)
+
+    def _level_state(self, q, R, p) -> tuple[np.ndarray, np.ndarray]:
+        """Cost ``0.5 e^T W e`` per level (in order, the posture's last) and whether each level is met.
+
+        A target level is met when all its targets are within half the
+        tolerances, balance when the centre of mass is inside the support
+        polygon's margin (within :data:`BALANCE_TOLERANCE`); the posture never is (it always compares by cost).
+        """
+        s = self._settings
+        self._task_errors(R, p)
+        L = len(self._levels)
+        costs = np.zeros(L + 1)
+        weighted = 0.5 * (self._row_w * self._e.reshape(-1, 6) ** 2).sum(axis=1)
+        np.add.at(costs, self._task_level, weighted)
+        missed = ((self._row_w[:, 0] > 0.0) & (self._err[0] > 0.5 * s.position_tolerance)) | \
+                 ((self._row_w[:, 3] > 0.0) & (self._err[1] > 0.5 * s.orientation_tolerance))
+        met = np.ones(L + 1, dtype=bool)
+        met[self._task_level[missed]] = False
+        met[L] = False
+        if self._balance is not None:
+            goal, com = self._support_goal(R, p)
+            outside = max(signed_distance(goal, com[:2]), 0.0)
+            costs[self._balance_level] = 0.5 * outside ** 2
+            met[self._balance_level] = outside <= BALANCE_TOLERANCE
+        if self._posture is not None:
+            g = q - self._posture.reference
+            P = self._posture.precision
+            costs[L] = 0.5 * float(g @ (P * g if P.ndim == 1 else P @ g))
+        return costs, met
+
+    def rank(self, q, R, p) -> tuple:
+        """The levels' costs in priority order (a met level counts 0): compare poses lexicographically."""
+        costs, met = self._level_state(q, R, p)
+        return tuple(np.where(met, 0.0, costs).tolist())
+
+    def _support_goal(self, R, p) -> tuple[np.ndarray, np.ndarray]:
+        """The polygon the centre of mass must stay in (support shrunk by the margin) and the centre of mass."""
+        b = self._balance
+        feet = [_transform(R[f], p[f]) for f in b.feet]
+        goal = shrink(support_polygon(feet, list(b.soles)), BALANCE_MARGIN)
+        return goal, center_of_mass(b.mass, R, p)
+
+    # -- the linearised levels -------------------------------------------------
+    def levels(self, q, R, p) -> list[Level]:
+        """The linearised levels at ``q`` (frames ``R``, ``p``), in priority order, the posture last."""
+        self._task_errors(R, p)
+        _jacobian(self._task_model, R, p, self._J)
+        rows = np.repeat(self._task_level, 6)
+        weights = self._row_w.reshape(-1)
+        out = []
+        for k in range(len(self._levels)):
+            if k == self._balance_level:
+                out.append(self._balance_level_rows(R, p))
+                continue
+            sel = (rows == k) & (weights > 0.0)
+            out.append(Level(self._J[sel], self._e[sel], weights[sel]))
+        if self._posture is not None:
+            out.append(posture_level(q, self._posture.reference, self._posture.precision))
+        return out
+
+    def _balance_level_rows(self, R, p) -> Level:
+        goal, com = self._support_goal(R, p)
+        n = self._sk.n_dofs
+        if signed_distance(goal, com[:2]) <= -BALANCE_BAND:
+            return Level(np.zeros((0, n)), np.zeros(0), np.zeros(0))
+        _jacobian(self._mass_kinematics, R, p, self._Jm)
+        Jc = com_jacobian(self._balance.mass, R, self._Jm)
+        return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
+
+    # -- one step --------------------------------------------------------------
+    def step(self, q: np.ndarray, W: np.ndarray, R: np.ndarray, p: np.ndarray, lam: np.ndarray) -> ControlStats:
+        """One prioritised step from ``q`` (n_dofs,) [rad], in place on ``q``, ``R``, ``p`` and ``lam`` (1,).
+
+        ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
+        """
+        s = self._settings
+        cached = self._state_cache
+        fresh = cached is not None and np.array_equal(cached[0], q) and np.array_equal(cached[1], W)
+        state0 = cached[2] if fresh else self._level_state(q, R, p)
+        damping = lam[0] if s.adaptive_damping else s.damping
+        dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), self._dampings(damping))
+        for tries in range(4):
+            verdict, q2, R2, p2, state = self._trial(q, q + dq, W, state0, damping)
+            if verdict != "worse" or not s.adaptive_damping:
+                break
+            dq = 0.5 * dq
+        accepted = verdict == "better" or not s.adaptive_damping
+        if accepted:
+            step_norm = float(np.linalg.norm(q2 - q))
+            q[:], R[:], p[:] = q2, R2, p2
+            self._state_cache = (q.copy(), W.copy(), state)
+            if s.adaptive_damping:
+                lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
+        else:
+            step_norm = 0.0
+            if verdict == "worse":
+                lam[0] = min(damping * 10.0, 1e6)
+        held = s.adaptive_damping and (verdict == "same" or (accepted and step_norm <= s.stall_tolerance))
+        converged, cost = self._summary(R, p)
+        return ControlStats(accepted, held, converged, cost, step_norm)
+
+    def _dampings(self, lam: float) -> np.ndarray:
+        """Damping per level: the adaptive one for the targets and balance, the fixed one for the
+        posture (its precision is well conditioned, and a raised damping would freeze it)."""
+        d = np.full(len(self._levels) + (self._posture is not None), lam)
+        if self._posture is not None:
+            d[-1] = self._settings.damping
+        return d
+
+    def _box(self, q: np.ndarray, q_from: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds ``lo <= dq <= hi`` (n,) of a step from ``q_from``: the limits, and the step limit counted from ``q``."""
+        s, sk = self._settings, self._sk
+        lo, hi = sk.lower - q_from, sk.upper - q_from
+        if s.max_step > 0.0:
+            lo = np.maximum(lo, q - q_from - s.max_step)
+            hi = np.minimum(hi, q - q_from + s.max_step)
+        return np.minimum(lo, 0.0), np.maximum(hi, 0.0)
+
+    def _trial(self, q, q_try, W, state0, damping):
+        """``(verdict, q, R, p, level state)`` of a trial pose. When a lower level's move breaks a met higher level
+        (the null space is only flat to first order), up to :data:`RESTORING_STEPS` restoring steps of the target levels
+        from the trial pose brings it back onto them, and that pose is judged instead."""
+        sk = self._sk
+        R2, p2 = np.empty((sk.n_frames, 3, 3)), np.empty((sk.n_frames, 3))
+        q2 = np.clip(q_try, sk.lower, sk.upper)
+        self._frames(q2, W, R2, p2)
+        state = self._level_state(q2, R2, p2)
+        verdict = _compare(state0, state, self._settings.settle_tolerance)
+        if verdict != "worse" or self._posture is None:
+            return verdict, q2, R2, p2, state
+        q3, R3, p3 = q2.copy(), R2.copy(), p2.copy()
+        for _ in range(RESTORING_STEPS):
+            levels = self.levels(q3, R3, p3)[:-1]
+            q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), damping), sk.lower, sk.upper)
+            self._frames(q3, W, R3, p3)
+            state3 = self._level_state(q3, R3, p3)
+            restored = _compare(state0, state3, self._settings.settle_tolerance)
+            if restored != "worse":
+                return restored, q3, R3, p3, state3
+        return verdict, q2, R2, p2, state
+
+    def _summary(self, R, p) -> tuple[bool, float]:
+        """``(converged, target cost)`` at frames ``R``, ``p``, from one error evaluation."""
+        s = self._settings
+        self._task_errors(R, p)
+        w = self._row_w
+        missed = ((w[:, 0] > 0.0) & (self._err[0] > s.position_tolerance)) | \
+                 ((w[:, 3] > 0.0) & (self._err[1] > s.orientation_tolerance))
+        return not bool(missed.any()), float(0.5 * (w * self._e.reshape(-1, 6) ** 2).sum())
+
+    def target_cost(self, R, p) -> float:
+        """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
+        self._task_errors(R, p)
+        return float(0.5 * (self._row_w * self._e.reshape(-1, 6) ** 2).sum())
+
+    def converged(self, R, p) -> bool:
+        """True if every target is within the position and orientation tolerances."""
+        pos, ori = self.errors(R, p)
+        s = self._settings
+        return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
+
+    def _frames(self, q, W, R, p) -> None:
+        _forward_kinematics(self._fk_model, q, self._root, W, R, p)
+
+
+# -- the kernels, in one place ------------------------------------------------------------------
+def _kinematics(skeleton, topo=None):
+    """The :class:`~gsik.kernels.KinematicModel` of the frames of ``topo`` (none: forward kinematics only)."""
+    return kinematic_model(skeleton, topo)
+
+
+def _jacobian(model, R, p, J) -> None:
+    """Fill ``J`` (6 m, n_dofs) for the effector frames of ``model``."""
+    kernels.jacobian(model, R, p, J)
+
+
+def _forward_kinematics(model, q, root_frame, W, R, p) -> None:
+    """World frames into ``R``, ``p`` at ``q``, frame ``root_frame`` pinned at ``W``."""
+    kernels.forward_kinematics(model, q, root_frame, W, R, p)
+
+
+def _ordered(tasks) -> list[FrameTask]:
+    """Tasks by priority, then name: one order for building and retargeting."""
+    return sorted(tasks, key=lambda t: (t.priority, t.name))
+
+
+def structure(skeleton, tasks, posture, balance, settings) -> tuple:
+    """What a :class:`Controller` is built for, apart from the target values: equal keys can retarget."""
+    feet = None if balance is None else balance.feet
+    return (skeleton.root, tuple((t.name, t.priority) for t in _ordered(tasks)), id(posture), feet, id(settings))
+
+
+def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]:
+    """The :class:`FrameTask` of each ``{name: gsik.Target}``."""
+    tasks = []
+    for name, t in targets.items():
+        w = np.zeros(6)
+        w[:3] = t.weight
+        if t.uses_orientation:
+            w[3:] = t.weight * orientation_weight
+        rotation = t.rotation
+        tasks.append(FrameTask(name, skeleton.frame_of(name), t.position, rotation, w, t.priority))
+    return tasks
+
+
+#: A foot whose target is within this height [m] of the standing foot is on the ground too.
+GROUND_TOLERANCE = 0.01
+
+
+def support(skeleton, targets, p: np.ndarray) -> Balance:
+    """The :class:`Balance` of ``skeleton`` seen from its root: the root foot, and every other foot with a
+    sole whose target is on the ground (the root foot's height); ``p`` (n_frames, 3) the world positions [m]."""
+    if skeleton.total_mass <= 0.0:
+        raise SolverError(f"balance needs segment masses; skeleton {skeleton.name!r} gives none "
+                          "(see skeletons/README.md: segments' mass)")
+    ground = p[skeleton.frame_of(skeleton.root)][2] if skeleton.root in skeleton.soles else 0.0
+    feet = [n for n in skeleton.soles if n == skeleton.root
+            or (n in targets and abs(targets[n].position[2] - ground) <= GROUND_TOLERANCE)]
+    return Balance(skeleton.mass_model, tuple(skeleton.frame_of(n) for n in feet),
+                   tuple(skeleton.soles[n] for n in feet))
+
+
+def _compare(before: tuple, after: tuple, settle: float) -> str:
+    """``"better"``, ``"worse"`` or ``"same"``: ``(costs, met)`` of the levels compared in order
+    (lexicographically); a level met before and after counts as unchanged."""
+    for c0, c1, met0, met1 in zip(before[0], after[0], before[1], after[1]):
+        if met0 and met1:
+            continue
+        if c1 > c0 * (1.0 + settle) + 1e-300:
+            return "worse"
+        if c1 < c0 * (1.0 - settle):
+            return "better"
+    return "same"
+
+
+def _transform(R, p) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T

@@ -1,0 +1,165 @@
+"""Artist control through the Solver: priorities, any frame as a target, posture, balance."""
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import gsik
+from gsik import Solver, Target
+from gsik.balance import signed_distance, support_polygon
+from gsik.benchmark import HELD_AT_LEVEL_0 as LEVEL_0
+from gsik.benchmark import hand_pull_targets as _pull
+
+
+def test_target_priority_defaults_to_0_and_must_be_a_whole_number_from_0():
+    assert Target([0, 0, 1]).priority == 0
+    assert Target([0, 0, 1], priority=2).replace(weight=3.0).priority == 2
+    for bad in (-1, 1.5, True, "1"):
+        with pytest.raises(gsik.TargetError, match="priority must be a whole number >= 0"):
+            Target([0, 0, 1], priority=bad)
+
+
+def test_a_level_1_hand_out_of_reach_never_moves_the_level_0_targets(biped):
+    solver = Solver(biped)
+    solver.set_targets(_pull(solver, [-3.0, 0.0, 0.0], 1))
+    history = []
+    for _ in range(150):
+        r = solver.step()
+        assert max(r.errors()[n][0] for n in LEVEL_0) < 1e-4
+        history.append(r.q)
+    assert np.abs(np.diff(history[-30:], axis=0)).max() < 1e-6  # settled: no jitter
+    single = Solver(biped)
+    single.set_targets(_pull(single, [-3.0, 0.0, 0.0], 0))
+    for _ in range(150):
+        flat = single.step()
+    # The single level trades the level-0 targets for the hand; the hierarchy does not.
+    assert max(flat.errors()[n][0] for n in LEVEL_0) > 1e-2
+    assert r.errors()["left_hand"][0] > flat.errors()["left_hand"][0]
+
+
+def test_solve_honours_priorities(biped):
+    solver = Solver(biped)
+    r = solver.solve(_pull(solver, [-3.0, 0.0, 0.0], 1))
+    assert max(r.errors()[n][0] for n in LEVEL_0) < 1e-4
+    assert r.errors()["left_hand"][0] > 2.0 and not r.converged
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_posture_below_sparse_targets_returns_the_pose_they_came_from(biped, seed):
+    rng = np.random.default_rng(seed)
+    q_star = rng.uniform(biped.lower, biped.upper)
+    solver = Solver(biped, q0=q_star)
+    poses = solver.effector_poses()
+    targets = {n: Target(poses[n][:3, 3]) for n in ("pelvis", "head", "left_hand", "right_hand", "left_foot")}
+    solver.set_posture(q_star)
+    r = solver.solve(targets, q0=biped.rest)
+    assert r.converged
+    np.testing.assert_allclose(r.q, q_star, atol=1e-3)
+
+
+def test_posture_never_costs_target_accuracy(biped):
+    solver = Solver(biped)
+    hand = solver.effector_poses()["left_hand"][:3, 3] + [0.1, 0.25, 0.3]
+    solver.set_posture(biped.clip(biped.rest + 0.5))
+    r = solver.solve({"left_hand": Target(hand)})
+    assert r.converged and r.errors()["left_hand"][0] < 1e-4
+
+
+def test_posture_weights_zero_turn_it_off_and_bad_ones_are_refused(biped):
+    solver = Solver(biped)
+    target = {"left_hand": Target(solver.effector_poses()["left_hand"][:3, 3] + [0.1, 0.2, 0.2])}
+    plain = Solver(biped).step(target)
+    solver.set_posture(weights=0.0)
+    np.testing.assert_array_equal(solver.step(target).q, plain.q)
+    with pytest.raises(gsik.SolverError, match="posture weights"):
+        solver.set_posture(weights=-1.0)
+    with pytest.raises(gsik.SolverError, match="posture weights"):
+        solver.set_posture(weights=np.ones(3))
+    with pytest.raises(gsik.SkeletonError, match="joint angles must have shape"):
+        solver.set_posture(np.zeros(3))
+
+
+def test_any_joint_or_site_takes_a_target(biped):
+    solver = Solver(biped)
+    p = solver.world_positions()
+    ankle = p[biped.frame_of("left_ankle")]
+    c, s = np.cos(0.3), np.sin(0.3)
+    knee = ankle + np.array([[1, 0, 0], [0, c, -s], [0, s, c]]) @ (p[biped.frame_of("left_knee")] - ankle)  # shin leans
+    r = solver.solve({"left_knee": Target(knee, position_only=True, priority=2),
+                      "left_foot": Target.from_transform(solver.effector_poses()["left_foot"])})
+    assert "left_knee" in r.effector_names
+    assert r.errors()["left_knee"][0] < 1e-4 and r.errors()["left_foot"][0] < 1e-4
+    np.testing.assert_allclose(solver.world_positions()[biped.frame_of("left_knee")], knee, atol=1e-4)
+
+
+def test_unknown_target_names_list_the_valid_ones(biped):
+    solver = Solver(biped)
+    with pytest.raises(gsik.TargetError, match=r"no effector 'left_kne'; effectors: .*; other joints and sites: .*"
+                                               r"'left_knee'"):
+        solver.set_targets({"left_kne": Target([0, 0, 1])})
+
+
+def test_center_of_mass_is_in_metres_in_the_world(biped):
+    solver = Solver(biped)
+    c = solver.center_of_mass()
+    assert abs(c[0]) < 1e-9 and 0.9 < c[2] < 1.05
+    W = np.eye(4)
+    W[:3, 3] = [1.0, 2.0, 0.0]
+    moved = Solver(biped, world_from_root=W @ solver.world_from_root)
+    np.testing.assert_allclose(moved.center_of_mass(), c + [1.0, 2.0, 0.0], atol=1e-12)
+
+
+def _balanced(biped):
+    solver = Solver(biped)
+    solver.set_balance(True)
+    for _ in range(100):
+        solver.step({})
+    return solver
+
+
+def test_balance_keeps_the_centre_of_mass_over_the_standing_foot(biped):
+    outside = {}
+    for on in (True, False):
+        solver = _balanced(biped)
+        solver.set_balance(on)
+        sole = support_polygon([solver.frame_transforms()[biped.frame_of("right_foot")]], [biped.soles["right_foot"]])
+        hand = solver.effector_poses()["left_hand"][:3, 3] + [0.0, 0.8, 0.0]
+        solver.set_targets({"left_hand": Target(hand, priority=1)})
+        worst = max(signed_distance(sole, (solver.step(), solver.center_of_mass())[1][:2]) for _ in range(200))
+        outside[on] = worst
+    assert outside[True] <= 0.0 < outside[False]
+
+
+def test_balance_stands_on_both_feet_when_the_free_foot_is_targeted_on_the_ground(biped):
+    solver = Solver(biped)
+    solver.set_balance(True)
+    feet = solver.effector_poses()
+    r = None
+    for _ in range(50):
+        r = solver.step({"left_foot": Target.from_transform(feet["left_foot"])})
+    # Between the feet already: balance leaves the pose alone.
+    np.testing.assert_allclose(r.q, biped.rest, atol=1e-9)
+
+
+def test_balance_needs_masses(biped):
+    bare = gsik.build_skeleton("stick", [gsik.JointSpec("a", None, (0, 0, 0), (gsik.RotationSpec((1, 0, 0), -1, 1),))],
+                               [gsik.SiteSpec("tip", "a", (0, 0, 1))], effectors=["tip"])
+    solver = Solver(bare)
+    with pytest.raises(gsik.SolverError, match="segment masses"):
+        solver.set_balance(True)
+    with pytest.raises(gsik.SolverError, match="segment masses"):
+        solver.center_of_mass()
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.integers(0, 2**32 - 1))
+def test_prioritised_steps_never_leave_the_limits(biped, seed):
+    rng = np.random.default_rng(seed)
+    solver = Solver(biped)
+    names = ("head", "pelvis", "left_hand", "right_hand", "left_knee", "right_elbow")
+    targets = {n: Target(rng.uniform([-1, -1, 0], [1, 1, 2]), priority=int(rng.integers(0, 3))) for n in names}
+    solver.set_posture(rng.uniform(biped.lower, biped.upper), weights=rng.uniform(0, 1, biped.n_dofs))
+    for _ in range(5):
+        q = solver.step(targets).q
+        assert np.all(q >= biped.lower) and np.all(q <= biped.upper)
