@@ -30,6 +30,7 @@ from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
 from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
 from gsik_studio.model.mirror import mirror_map
+from gsik_studio.model.pins import PINNED_BY_DEFAULT, SolveControls, pin_level
 from gsik_studio.model.poses import RootPlacement, check_pose, driven_target, standing_pose, target_at
 
 if TYPE_CHECKING:
@@ -72,8 +73,14 @@ class Document:
         self._targets: dict[str, Target] = {}
         self._playback: Playback | None = None
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
-        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
+        self.controls = SolveControls(self.solver)
+        self._restore(self._standing())
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
+
+    def _standing(self) -> Pose:
+        """The standing pose of a new document: feet and pelvis pinned (:data:`pins.PINNED_BY_DEFAULT`)."""
+        return standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT,
+                             {n: pin_level(n in PINNED_BY_DEFAULT) for n in self.skeleton.effector_sites})
 
     # -- read-outs -------------------------------------------------------------
     @property
@@ -215,8 +222,8 @@ class Document:
         if not isinstance(target, Target):
             raise gsik.TargetError(f"target for {name!r} must be a gsik.Target, got {type(target).__name__}")
         old = self._targets[name]
-        same_flags = (old.enabled, old.weight, old.position_only) == (target.enabled, target.weight,
-                                                                      target.position_only)
+        same_flags = (old.enabled, old.weight, old.position_only, old.priority) == (
+            target.enabled, target.weight, target.position_only, target.priority)
 
         def apply():
             self._targets[name] = target
@@ -264,11 +271,11 @@ class Document:
                         f"Rotate {name} about {axis}")
 
     def set_target_options(self, name: str, *, enabled: bool | None = None, weight: float | None = None,
-                           position_only: bool | None = None) -> None:
-        """Enable or disable an effector, change its weight or its position-only flag."""
+                           position_only: bool | None = None, priority: int | None = None) -> None:
+        """Enable or disable an effector, change its weight, position-only flag or priority level (its pin)."""
         t = self._effector(name)
-        changes = {k: v for k, v in dict(enabled=enabled, weight=weight, position_only=position_only).items()
-                   if v is not None}
+        changes = {k: v for k, v in dict(enabled=enabled, weight=weight, position_only=position_only,
+                                         priority=priority).items() if v is not None}
         new = t.replace(**changes)
         if new == t:
             return
@@ -424,7 +431,7 @@ class Document:
         """The standing pose, no file, empty history."""
         self._interrupt_playback()
         file_state = self._file_state()
-        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
+        self._restore(self._standing())
         self.history.clear()
         self.path = None
         self._replaced(file_state)
