@@ -25,6 +25,7 @@ from gsik_studio.model import Document, FrameLoop, Playback
 from gsik_studio.model.joints import JointEditor
 from gsik_studio.qt_compat import protect_none
 from gsik_studio.widgets import nice
+from gsik_studio.widgets.balance_panel import balance_panel
 from gsik_studio.widgets.effectors import EffectorsPanel
 from gsik_studio.widgets.joint_panel import JointPanel
 from gsik_studio.widgets.selected import SelectedTargetPanel
@@ -52,6 +53,7 @@ class MainWindow(QtWidgets.QMainWindow):
         import pyvista as pv
         from pyvistaqt import QtInteractor
 
+        from gsik_studio.balance_view import BalanceView
         from gsik_studio.body_view import BodyView
         from gsik_studio.joint_rings import JointRings
         from gsik_studio.viewport import Viewport
@@ -67,6 +69,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setCentralWidget(self.plotter)
         self.viewport = Viewport(self.plotter, self.doc)
         self.body = BodyView(self.viewport)
+        self.balance_view = BalanceView(self.doc, self.body.overlay)
+        self.viewport.layers.append(self.balance_view)
         self.joints = JointEditor(self.doc)
         self.rings = JointRings(self.viewport, self.joints)
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
@@ -111,7 +115,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.solver_panel = solver_panel(self.doc, self.settings)
         self.solver_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
         self.solver_panel.restore()
-        for box in (self.effectors, self.selected, self.joint_panel, self.solver_panel):
+        self.balance_panel = balance_panel(self.doc, self.settings, self.show_support)
+        self.balance_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
+        self.balance_panel.restore()
+        for box in (self.effectors, self.selected, self.joint_panel, self.balance_panel, self.solver_panel):
             layout.addWidget(box)
         layout.addStretch(1)
         scroll = QtWidgets.QScrollArea()
@@ -138,6 +145,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.loop.events.readouts.connect(self.joint_panel.show_angles)
         ev.pose.connect(self.joint_panel.show_angles)
         self.joints.selection_changed.connect(lambda _name: self.viewport.render())
+        self.doc.controls.changed.connect(self.loop.wake)
         self.loop.events.message.connect(lambda text: self.statusBar().showMessage(text, 8000))
         self.viewport.selection_changed.connect(self._show_selection)
         self.viewport.drag_finished.connect(lambda _name: self._show_history())
@@ -269,6 +277,11 @@ class MainWindow(QtWidgets.QMainWindow):
         self.body.set_mode(mode)
         with QtCore.QSignalBlocker(self.act_sticks):
             self.act_sticks.setChecked(mode == "sticks")
+        self.viewport.render()
+
+    def show_support(self, on: bool) -> None:
+        """Show or hide the centre of mass and the support polygon."""
+        self.balance_view.set_visible(on)
         self.viewport.render()
 
     def set_view(self, name: str) -> None:
