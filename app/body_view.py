@@ -1,8 +1,8 @@
 """How the body is drawn: the mannequin or the stick figure, with the joint rings on top of either.
 
-The rings move to an overlay renderer (layer 1, same camera, its own depth
-buffer), so the solids never hide them: an artist can grab any joint's ring
-through the body. The target spheres inside the body (head, pelvis) are
+The rings (and the achieved effectors, triads and error lines) move to an
+overlay renderer (layer 1, same camera, its own depth buffer), so the solids
+never hide them: an artist can grab any joint's ring through the body. The target spheres inside the body (head, pelvis) are
 drawn there too, as markers over the sphere widgets (the widgets pick only
 their own sphere, so a hidden one is still grabbed). Drawn as a layer of the
 :class:`gsik_studio.viewport.Viewport`.
@@ -16,10 +16,12 @@ import vtk
 
 from gsik_studio.mannequin import Mannequin
 from gsik_studio.scene import glyph_actor, points_view, rgb8, set_colors, touch
-from gsik_studio.viewport import TARGET_COLOR, TARGET_OPACITY, TARGET_RADIUS, TARGET_SELECTED_COLOR
+from gsik_studio.viewport import TARGET_COLOR, TARGET_RADIUS, TARGET_SELECTED_COLOR
 
 #: The ways the body can be drawn.
 BODY_MODES = ("mannequin", "sticks")
+#: The viewport's actors drawn over the body: the axis rings, the achieved effectors, their triads, error lines.
+OVERLAID = ("gizmos", "effectors", "triads", "errors")
 
 
 def overlay_renderer(plotter) -> vtk.vtkRenderer:
@@ -49,15 +51,19 @@ class BodyView:
         pl = viewport.plotter
         self.mannequin = Mannequin(pl, viewport.doc.skeleton)
         self.overlay = overlay_renderer(pl)
-        rings = viewport.actors["gizmos"]
-        pl.renderer.RemoveActor(rings)
-        self.overlay.AddActor(rings)
+        for name in OVERLAID:
+            pl.renderer.RemoveActor(viewport.actors[name])
+            self.overlay.AddActor(viewport.actors[name])
         self._sites = viewport.doc.skeleton.effector_sites
         self._markers = pv.PolyData(np.zeros((len(self._sites), 3)))
         self._marker_xyz = points_view(self._markers)
         self._marker_colors = np.zeros((len(self._sites), 3), dtype=np.uint8)
+        # A wire cage the size of the widget's sphere, so the achieved effector shows through it: a
+        # translucent overlay costs about a third more per render under software GL.
         self.markers = glyph_actor(self._markers, TARGET_RADIUS, self._marker_colors.copy())
-        self.markers.GetProperty().SetOpacity(TARGET_OPACITY)
+        self.markers.GetProperty().SetRepresentationToWireframe()
+        self.markers.GetProperty().SetLighting(False)
+        self.markers.GetProperty().SetLineWidth(1.5)
         self.overlay.AddActor(self.markers)
         self.mode = ""
         viewport.layers.append(self)
@@ -86,13 +92,16 @@ class BodyView:
             self._show_targets()
 
     def _show_targets(self) -> None:
-        """Markers on the enabled targets (a disabled one sinks far below the floor), the selected one lighter."""
+        """Markers on the shown targets (a hidden one sinks far below the floor), the selected one lighter.
+
+        A target is shown while its sphere widget is on (an enabled target, targets not hidden for a picture).
+        """
         vp = self.viewport
         targets = vp.doc.targets
         colors = np.empty_like(self._marker_colors)
         for i, name in enumerate(self._sites):
             t = targets.get(name)
-            on = t is not None and t.enabled
+            on = t is not None and bool(vp.target_widgets[i].GetEnabled())
             self._marker_xyz[i] = t.position if on else (0.0, 0.0, -1e3)
             colors[i] = rgb8(TARGET_SELECTED_COLOR if name == vp.selected else TARGET_COLOR)
         touch(self._markers)

@@ -4,7 +4,7 @@ A Qt event filter on the 3D view sees a press before VTK does. A press on a
 ring (within :data:`PICK_PX` of one of its drawn points) selects that joint
 and starts turning that one-DOF rotation; a press on a joint's centre selects
 it. Either press is kept from VTK (no orbit starts). A press near a target
-sphere goes on to VTK, whose sphere widget takes it. While turning, the
+or pole sphere goes on to VTK, whose sphere widget takes it. While turning, the
 mouse ray meets the ring's plane and the angle swept about the axis is the
 turn, so the grabbed point of the ring follows the pointer; a ring seen edge
 on turns by the pointer's travel along the ring's screen tangent instead.
@@ -118,6 +118,7 @@ class JointRings(QtCore.QObject):
         """What a press at display point ``xy`` grabs: ``("ring", dof)``, ``("joint", name)`` or None."""
         doc = self.viewport.doc
         targets = [t.position for t in doc.targets.values() if t.enabled]
+        targets += [t.position for t in doc.controls.poles.values()]  # pole gizmos sit on knees and elbows
         if targets and np.min(np.linalg.norm(self.project(np.array(targets)) - xy, axis=1)) <= TARGET_GUARD_PX:
             return None
         _, _, rings = self.ring_world()

@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 import pyvista as pv
+import vtk
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 import gsik
@@ -188,6 +189,22 @@ class BodyMesh:
         self.polydata.GetPointData().GetArray("Normals").Modified()
 
 
+def _solid_actor(pd: pv.PolyData) -> vtk.vtkActor:
+    """A plain mapper and actor (no pyvista pipeline in between): per-point RGB, the PolyData's own normals."""
+    mapper = vtk.vtkPolyDataMapper()
+    mapper.SetInputData(pd)
+    mapper.SetScalarModeToUsePointFieldData()
+    mapper.SelectColorArray("colors")
+    mapper.SetColorModeToDirectScalars()
+    mapper.ScalarVisibilityOn()
+    actor = vtk.vtkActor()
+    actor.SetMapper(mapper)
+    prop = actor.GetProperty()
+    prop.SetSpecular(0.25)
+    prop.SetSpecularPower(18)
+    return actor
+
+
 class Mannequin:
     """The body: capsules and boxes added to a plotter once; :meth:`update` moves them in place.
 
@@ -210,9 +227,9 @@ class Mannequin:
                      colors(caps)),
             BodyMesh([s.carrier for s in boxes], [_box_local(s) for s in boxes], box_faces(1), colors(boxes)),
         )
-        self.actors = [plotter.add_mesh(m.polydata, scalars="colors", rgb=True, smooth_shading=False, specular=0.25,
-                                        specular_power=18, pickable=False, reset_camera=False, name=f"body{i}")
-                       for i, m in enumerate(self.meshes)]
+        self.actors = [_solid_actor(m.polydata) for m in self.meshes]
+        for a in self.actors:
+            plotter.add_actor(a, reset_camera=False, pickable=False)
 
     @property
     def n_solids(self) -> int:

@@ -56,6 +56,7 @@ class MainWindow(QtWidgets.QMainWindow):
         from gsik_studio.balance_view import BalanceView
         from gsik_studio.body_view import BodyView
         from gsik_studio.joint_rings import JointRings
+        from gsik_studio.pole_gizmos import PoleGizmos
         from gsik_studio.viewport import Viewport
 
         pv.global_theme.multi_samples = 0  # software GL: multisampling costs 3-5x
@@ -71,6 +72,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.body = BodyView(self.viewport)
         self.balance_view = BalanceView(self.doc, self.body.overlay)
         self.viewport.layers.append(self.balance_view)
+        self.poles = PoleGizmos(self.viewport)
         self.joints = JointEditor(self.doc)
         self.rings = JointRings(self.viewport, self.joints)
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,

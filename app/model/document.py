@@ -73,7 +73,7 @@ class Document:
         self._targets: dict[str, Target] = {}
         self._playback: Playback | None = None
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
-        self.controls = SolveControls(self.solver)
+        self.controls = SolveControls(self.solver, self._push_targets)
         self._restore(self._standing())
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
 
@@ -161,8 +161,8 @@ class Document:
         self.last_result = None
 
     def _push_targets(self) -> None:
-        """Hand the targets to the solver (it skips the disabled ones)."""
-        self.solver.set_targets(self._targets)
+        """Hand the targets and the pole targets to the solver (it skips the disabled ones)."""
+        self.solver.set_targets({**self._targets, **self.controls.poles})
         self.needs_solving = True
 
     def _snapped_targets(self) -> dict[str, Target]:

@@ -13,6 +13,7 @@ the solver anything.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -24,6 +25,9 @@ from gsik_studio.model.events import Signal
 
 PINNED = 0  #: priority level of a pinned target
 FREE = 1  #: priority level of an unpinned target
+POLE = 2  #: priority level of a pole target: it only bends a limb in what the targets leave free
+#: Joints that get a pole target (where the skeleton has them): the knees and elbows.
+POLE_JOINTS = ("left_knee", "right_knee", "left_elbow", "right_elbow")
 #: Effectors pinned in a new document: pulling a hand never moves them unless unpinned.
 PINNED_BY_DEFAULT = ("left_foot", "right_foot", "pelvis")
 
@@ -56,17 +60,50 @@ class Support(NamedTuple):
 class SolveControls:
     """Posture strength and balance of a document's solver, and the centre of mass and support read-outs.
 
+    Pole targets are position-only targets on knees and elbows at level
+    :data:`POLE`: dragging one swings the limb's bend towards it without moving
+    any hand or foot. They are solver state like the posture (not saved, not undone).
+
     Args:
         solver: The document's solver.
+        push: Hands the document's targets and these poles to the solver (the document's own method).
 
     Attributes:
-        changed: Signal() after the posture strength or balance changed.
+        poles: ``{joint: Target}`` while pole targets are on, else empty.
+        changed: Signal() after the posture strength, balance or a pole changed.
     """
 
-    def __init__(self, solver: gsik.Solver):
+    def __init__(self, solver: gsik.Solver, push: Callable[[], None]):
         self._solver = solver
+        self._push = push
         self.posture_strength = 0.0
+        self.poles: dict[str, Target] = {}
         self.changed = Signal()
+
+    @property
+    def pole_joints(self) -> tuple[str, ...]:
+        """The joints of :data:`POLE_JOINTS` this skeleton has."""
+        return tuple(n for n in POLE_JOINTS if n in self._solver.skeleton.joint_names)
+
+    def joint_position(self, joint: str) -> np.ndarray:
+        """World position (3,) [m] of a joint now."""
+        sk = self._solver.skeleton
+        return self._solver.world_positions()[sk.joint_frame[sk.joint_names.index(joint)]]
+
+    def set_poles(self, on: bool) -> None:
+        """Turn pole targets on (each placed on its joint, so nothing moves yet) or off."""
+        self.poles = {n: Target(self.joint_position(n), position_only=True, priority=POLE)
+                      for n in self.pole_joints} if on else {}
+        self._push()
+        self.changed.emit()
+
+    def move_pole(self, joint: str, position) -> None:
+        """Move one pole target to a world position (3,) [m]."""
+        if joint not in self.poles:
+            raise gsik.TargetError(f"no pole target on {joint!r}; poles: {', '.join(self.poles) or 'none (off)'}")
+        self.poles[joint] = self.poles[joint].replace(position=position)
+        self._push()
+        self.changed.emit()
 
     @property
     def has_masses(self) -> bool:

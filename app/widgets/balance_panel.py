@@ -1,4 +1,4 @@
-"""The "Posture and balance" panel: posture strength (a field row), the balance toggle, showing the centre of mass."""
+"""The "Posture and balance" panel: posture strength (a field row), balance, the centre of mass shown, pole targets."""
 
 from __future__ import annotations
 
@@ -33,6 +33,12 @@ def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Calla
     for box in (form.balance, form.show_com):
         box.setEnabled(controls.has_masses)
         form.layout().addRow(box)
+    form.poles = QtWidgets.QCheckBox("Pole targets for knees and elbows")
+    form.poles.setToolTip("Small violet spheres on the knees and elbows: drag one to swing the limb's bend, "
+                          "below every other target (a hand or foot never moves for it)")
+    form.poles.setEnabled(bool(controls.pole_joints))
+    form.poles.toggled.connect(controls.set_poles)
+    form.layout().addRow(form.poles)
 
     def set_balance(on: bool) -> None:
         try:

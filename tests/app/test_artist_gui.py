@@ -249,3 +249,22 @@ def test_screenshot_shows_mannequin_pins_and_centre_of_mass(window, qtbot, tmp_p
     assert doc.controls.support().inside
     path = tmp_path / "artist.png"
     assert img.save(str(path))
+
+
+def test_a_pole_gizmo_dragged_with_the_mouse_swings_the_knee(window, qtbot):
+    doc = window.doc
+    doc.move_target("pelvis", doc.targets["pelvis"].position + (0.0, 0.0, -0.08))  # crouch: the knees bend
+    _settle(qtbot, window)
+    _click_widget(window.balance_panel.poles)
+    assert set(doc.controls.poles) == {"left_knee", "right_knee", "left_elbow", "right_elbow"}
+    assert all(w.GetEnabled() for w in window.poles.widgets.values())
+    _settle(qtbot, window)
+    knee0 = doc.controls.joint_position("left_knee").copy()
+    pelvis = doc.effector_poses()["pelvis"][:3, 3].copy()
+    xy = window.rings.project(doc.controls.poles["left_knee"].position[None])[0]
+    _press_drag_release(window, xy, xy + np.array([80.0, 0.0]))  # front view: +x on screen is the body's left
+    assert window.joints.selected is None  # the pole widget took the press, not the rings
+    assert doc.controls.poles["left_knee"].position[0] < knee0[0] - 0.05
+    # The pole is the lowest level: the knee swings over a few dozen frames (slowly on a loaded machine).
+    qtbot.waitUntil(lambda: doc.controls.joint_position("left_knee")[0] < knee0[0] - 0.02, timeout=30000)
+    assert np.linalg.norm(doc.effector_poses()["pelvis"][:3, 3] - pelvis) < 1e-3

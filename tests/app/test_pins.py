@@ -115,3 +115,23 @@ def test_with_balance_a_hand_pulled_forward_keeps_the_centre_of_mass_over_the_fe
     settle(doc)
     pull(doc, "left_hand", (0.0, 0.8, 0.0))
     assert doc.controls.support().inside
+
+
+def test_a_pole_target_swings_the_knee_without_moving_the_feet_or_pelvis(doc):
+    doc.move_target("pelvis", doc.targets["pelvis"].position + (0.0, 0.0, -0.08))  # crouch: the knees bend
+    settle(doc)
+    doc.controls.set_poles(True)
+    assert set(doc.controls.poles) == {"left_knee", "right_knee", "left_elbow", "right_elbow"}
+    settle(doc)
+    knee0 = doc.controls.joint_position("left_knee").copy()
+    poses0 = {n: T[:3, 3].copy() for n, T in doc.effector_poses().items()}
+    doc.controls.move_pole("left_knee", knee0 + (-0.3, 0.0, 0.0))  # swing the knee outwards
+    settle(doc)
+    knee = doc.controls.joint_position("left_knee")
+    assert knee[0] - knee0[0] < -0.03
+    for name in ("pelvis", "left_foot"):
+        assert np.linalg.norm(doc.effector_poses()[name][:3, 3] - poses0[name]) < 1e-4
+    doc.controls.set_poles(False)
+    assert doc.controls.poles == {} and "left_knee" not in doc.solver.targets
+    with pytest.raises(gsik.TargetError, match="no pole target"):
+        doc.controls.move_pole("left_knee", knee0)
