@@ -2,9 +2,10 @@
 
 The rings (and the achieved effectors, triads and error lines) move to an
 overlay renderer (layer 1, same camera, its own depth buffer), so the solids
-never hide them: an artist can grab any joint's ring through the body. The target spheres inside the body (head, pelvis) are
-drawn there too, as markers over the sphere widgets (the widgets pick only
-their own sphere, so a hidden one is still grabbed). Drawn as a layer of the
+never hide them: an artist can grab any joint's ring through the body. The
+target spheres inside the body (head, pelvis) are drawn there too, as wire
+markers over the sphere widgets (the widgets pick only their own sphere, so a
+hidden one is still grabbed). Drawn as a layer of the
 :class:`gsik_studio.viewport.Viewport`.
 """
 

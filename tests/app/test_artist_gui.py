@@ -1,4 +1,4 @@
-"""The artist's tools in the real window under Xvfb: the mannequin, joint rings, pins, balance (real Qt mouse events)."""
+"""The artist's tools in the real window under Xvfb: mannequin, joint rings, pins, balance, poles (real Qt events)."""
 
 from __future__ import annotations
 

@@ -353,7 +353,7 @@ def test_walk_button_plays_a_walk_as_one_undo_step(qtbot, window):
     pb = window.play_walk(n_steps=1)
     assert pb is not None and window.play_timer.isActive()
     window.play_timer.setInterval(1)  # play as fast as it draws
-    qtbot.waitUntil(lambda: window.playback is None, timeout=90000)  # render-bound: ~0.3 s a frame under load 13 on 2 cores
+    qtbot.waitUntil(lambda: window.playback is None, timeout=90000)  # render-bound: 0.3 s a frame at load 13
     assert roots >= {"left_foot", "right_foot"}  # the root swapped between the feet
     moved = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("pelvis")] - pelvis
     assert moved[1] > 0.15  # walked forward (+y)
@@ -388,7 +388,7 @@ def test_animated_scenario_plays_its_frames(qtbot, window):
     window.scenario_menu.actions()[names.index("wave")].trigger()
     assert window.playback is not None and window.playback.n_frames > 1
     window.play_timer.setInterval(1)  # play as fast as it draws
-    qtbot.waitUntil(lambda: window.playback is None, timeout=90000)  # render-bound: ~0.3 s a frame under load 13 on 2 cores
+    qtbot.waitUntil(lambda: window.playback is None, timeout=90000)  # render-bound: 0.3 s a frame at load 13
     assert window.doc.history.undo_text == "Scenario wave (animated)"
     hand = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("right_hand")]
     head = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("head")]
