@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import vtk
 
+from gsik_studio.scene import sphere_widget
+
 POLE_COLOR = (0.70, 0.45, 1.00)
 POLE_SELECTED_COLOR = (0.88, 0.75, 1.00)
 POLE_RADIUS = 0.022  # [m]
@@ -27,17 +29,7 @@ class PoleGizmos:
         pl = viewport.plotter
         self.widgets: dict[str, vtk.vtkSphereWidget] = {}
         for name in self.controls.pole_joints:
-            w = vtk.vtkSphereWidget()
-            w.SetInteractor(pl.iren.interactor)
-            w.SetCurrentRenderer(pl.renderer)
-            w.SetRepresentationToSurface()
-            w.SetRadius(POLE_RADIUS)
-            w.SetThetaResolution(14)
-            w.SetPhiResolution(10)
-            w.ScaleOff()
-            w.SetPriority(1.0)
-            w.GetSphereProperty().SetColor(POLE_COLOR)
-            w.GetSelectedSphereProperty().SetColor(POLE_SELECTED_COLOR)
+            w = sphere_widget(pl, POLE_RADIUS, POLE_COLOR, POLE_SELECTED_COLOR, (14, 10))
             w.AddObserver("StartInteractionEvent", lambda _w, _e, n=name: setattr(self, "dragging", n))
             w.AddObserver("InteractionEvent", lambda w_, _e, n=name: self.controls.move_pole(n, w_.GetCenter()))
             w.AddObserver("EndInteractionEvent", lambda _w, _e: setattr(self, "dragging", None))

@@ -30,7 +30,7 @@ import vtk
 
 from gsik.rotations import quaternion_from_matrix, transform
 from gsik_studio.model import Document, Signal
-from gsik_studio.scene import glyph_actor, line_cells, points_view, rgb8, set_colors, touch
+from gsik_studio.scene import glyph_actor, line_cells, points_view, rgb8, set_colors, sphere_widget, touch
 
 # Colours (RGB 0-1). Red / green / blue are reserved for targets, effectors and axes.
 AXIS_COLORS = np.array([[0.93, 0.18, 0.16], [0.20, 0.80, 0.22], [0.20, 0.45, 1.00]])
@@ -195,19 +195,7 @@ class Viewport:
         # Target gizmos: one sphere widget per effector site.
         self.target_widgets = []
         for i, name in enumerate(self._sites):
-            w = vtk.vtkSphereWidget()
-            w.SetInteractor(pl.iren.interactor)
-            w.SetCurrentRenderer(pl.renderer)
-            w.SetRepresentationToSurface()
-            w.SetRadius(TARGET_RADIUS)
-            w.SetThetaResolution(20)
-            w.SetPhiResolution(14)
-            w.ScaleOff()
-            w.SetPriority(1.0)
-            w.GetSphereProperty().SetColor(TARGET_COLOR)
-            w.GetSphereProperty().SetSpecular(0.4)
-            w.GetSphereProperty().SetOpacity(TARGET_OPACITY)
-            w.GetSelectedSphereProperty().SetColor(TARGET_SELECTED_COLOR)
+            w = sphere_widget(pl, TARGET_RADIUS, TARGET_COLOR, TARGET_SELECTED_COLOR, opacity=TARGET_OPACITY)
             w.AddObserver("StartInteractionEvent", self._make_callback(self._on_drag_start, name))
             w.AddObserver("InteractionEvent", self._make_callback(self._on_drag_move, name))
             w.AddObserver("EndInteractionEvent", self._make_callback(self._on_drag_end, name))

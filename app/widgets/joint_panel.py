@@ -7,7 +7,7 @@ import math
 from PySide6 import QtCore, QtWidgets
 
 from gsik_studio.model.joints import JointEditor
-from gsik_studio.widgets import nice
+from gsik_studio.widgets import hint, nice
 from gsik_studio.widgets.selected import AXIS_COLORS
 
 MAX_DOFS = 3  # a joint turns about at most three axes
@@ -40,11 +40,8 @@ class JointPanel(QtWidgets.QGroupBox):
         self.follow.setChecked(editor.targets_follow)
         self.follow.toggled.connect(lambda on: setattr(editor, "targets_follow", bool(on)))
         form.addRow(self.follow)
-        hint = QtWidgets.QLabel("<small>Click a joint to select it; drag one of its rings "
-                                "(x red, y green, z blue) to turn it within its limits.</small>")
-        hint.setWordWrap(True)
-        hint.setStyleSheet("color: gray")
-        form.addRow(hint)
+        form.addRow(hint("Click a joint to select it; drag one of its rings "
+                         "(x red, y green, z blue) to turn it within its limits."))
         editor.selection_changed.connect(lambda _name: self.show_joint())
         self.show_joint()
 

@@ -136,3 +136,19 @@ def studio_settings(tmp_path):
     from PySide6 import QtCore
 
     return QtCore.QSettings(str(tmp_path / "studio.ini"), QtCore.QSettings.IniFormat)
+
+
+@pytest.fixture()
+def window(qtbot, studio_settings):
+    """The studio's main window, shown in the tests' Xvfb, with isolated settings."""
+    from gsik_studio.window import MainWindow
+
+    w = MainWindow(settings=studio_settings)
+    w.resize(1280, 860)
+    w.show()
+    qtbot.waitExposed(w)
+    w.activateWindow()
+    qtbot.wait(50)
+    yield w
+    w.doc.history.set_clean()  # no "unsaved changes" question on teardown
+    w.close()

@@ -15,19 +15,11 @@ def on_plane(*args):
 
 
 @pytest.fixture()
-def window(qtbot, studio_settings):
-    from gsik_studio.window import MainWindow
-
-    w = MainWindow(settings=studio_settings)
-    w.resize(1280, 860)
-    w.show()
-    qtbot.waitExposed(w)
-    w.activateWindow()
-    w.set_view("front")
+def window(window, qtbot):
+    """The studio's window (conftest.py), seen from the front."""
+    window.set_view("front")
     qtbot.wait(50)
-    yield w
-    w.doc.history.set_clean()
-    w.close()
+    return window
 
 
 def _qpoint(window, xy):

@@ -17,21 +17,6 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 
 @pytest.fixture()
-def window(qtbot, studio_settings):
-    from gsik_studio.window import MainWindow
-
-    w = MainWindow(settings=studio_settings)
-    w.resize(1280, 860)
-    w.show()
-    qtbot.waitExposed(w)
-    w.activateWindow()
-    qtbot.wait(50)
-    yield w
-    w.doc.history.set_clean()  # no "unsaved changes" question on teardown
-    w.close()
-
-
-@pytest.fixture()
 def boxes(monkeypatch):
     """Records QMessageBox calls instead of showing them; ``answer`` is returned from question()."""
     from PySide6.QtWidgets import QMessageBox
