@@ -8,9 +8,11 @@ from collections.abc import Callable
 from PySide6 import QtCore, QtWidgets
 
 import gsik
-from gsik_studio.model import Document
+from gsik_studio.model import Document, transfer
 
 POSE_FILTER = "gsik poses (*.yaml *.yml);;All files (*)"
+BVH_FILTER = "BVH motion (*.bvh);;All files (*)"
+SKELETON_FILTER = "Skeletons (*.yaml *.yml *.urdf *.xml);;All files (*)"
 MAX_RECENT = 8
 
 
@@ -24,13 +26,15 @@ class FileActions:
         show_message: ``(text, milliseconds)`` on the status bar.
         stop_playback: Ends a running playback before the document is replaced.
         opened: Called after a file was opened (the window frames the character).
+        open_document: Shows a new document in a window of its own (an imported skeleton); returns the window.
     """
 
     def __init__(self, parent: QtWidgets.QWidget, doc: Document, settings: QtCore.QSettings,
                  show_message: Callable[[str, int], None], stop_playback: Callable[[], None],
-                 opened: Callable[[], None]):
+                 opened: Callable[[], None], open_document: Callable[[Document], object] = lambda doc: None):
         self.parent, self.doc, self.settings = parent, doc, settings
         self._message, self._stop_playback, self._opened = show_message, stop_playback, opened
+        self._open_document = open_document
         self.recent_menu = QtWidgets.QMenu("Open &Recent", parent)
         self.update_recent_menu()
 
@@ -108,6 +112,73 @@ class FileActions:
                                 f"The pose was not saved (any existing file is unchanged).\n\n{exc}")
         self.add_recent(path)
         self._message(f"Saved {path}", 5000)
+        return True
+
+    # -- import and export ---------------------------------------------------------------
+    def _path(self, title: str, filters: str, save_name: str | None = None) -> str:
+        if save_name is None:
+            return QtWidgets.QFileDialog.getOpenFileName(self.parent, title, self.start_dir(), filters)[0]
+        return QtWidgets.QFileDialog.getSaveFileName(self.parent, title, os.path.join(self.start_dir(), save_name),
+                                                     filters)[0]
+
+    def import_clip_dialog(self) -> object:
+        path = self._path("Import BVH clip", BVH_FILTER)
+        return self.import_clip_path(path) if path else False
+
+    def import_clip_path(self, path: str) -> object:
+        """Put a BVH clip on the timeline and play it: on this document when it is of this skeleton, else on
+        a new document of the clip's skeleton (its window is returned). False, saying why, on a bad file."""
+        try:
+            imported = transfer.read_clip(path)
+        except gsik.GsikError as exc:
+            return self._failed(f"Could not import {os.path.basename(path)}: {exc}", "Could not import clip",
+                                f"The BVH clip could not be imported; nothing was changed.\n\n{exc}")
+        name = os.path.basename(path)
+        motion = transfer.motion_on(self.doc.skeleton, imported.motion)
+        if motion is None:  # another skeleton: a document of its own
+            doc = transfer.document_for(imported.skeleton)
+            doc.timeline.load(imported.motion, name)
+            window = self._open_document(doc)
+            doc.timeline.play()
+            self._message(f"Imported {name} on its own skeleton ({transfer.describe(imported.skeleton)})",
+                          8000)
+            return window
+        self._stop_playback()
+        self.doc.timeline.load(motion, name)
+        self.doc.timeline.play()
+        self._message(f"Imported {name}: {motion.n_frames} frames on the timeline", 8000)
+        return True
+
+    def import_skeleton_dialog(self) -> object:
+        path = self._path("Import skeleton", SKELETON_FILTER)
+        return self.import_skeleton_path(path) if path else False
+
+    def import_skeleton_path(self, path: str) -> object:
+        """A new document on the skeleton of a YAML or URDF file, in a window of its own (returned); False on error."""
+        try:
+            skeleton = transfer.read_skeleton(path)
+            doc = transfer.document_for(skeleton)
+        except gsik.GsikError as exc:
+            return self._failed(f"Could not import {os.path.basename(path)}: {exc}", "Could not import skeleton",
+                                f"The skeleton could not be loaded; nothing was changed.\n\n{exc}")
+        self._message(f"New document on {transfer.describe(skeleton)}", 8000)
+        return self._open_document(doc)
+
+    def export_bvh_dialog(self) -> bool:
+        path = self._path("Export BVH", BVH_FILTER, "motion.bvh")
+        if path and not os.path.splitext(path)[1]:
+            path += ".bvh"
+        return self.export_bvh_path(path) if path else False
+
+    def export_bvh_path(self, path: str) -> bool:
+        """Write the clip, else the key sequence, else the pose as BVH; False, saying why, on error."""
+        self._stop_playback()
+        try:
+            what = transfer.export_bvh(self.doc, path)
+        except gsik.GsikError as exc:
+            return self._failed(f"Could not export: {exc}", "Could not export BVH",
+                                f"Nothing was written (any existing file is unchanged).\n\n{exc}")
+        self._message(f"Exported the {what} to {path}", 6000)
         return True
 
     def _failed(self, status: str, title: str, text: str) -> bool:

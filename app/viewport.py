@@ -436,12 +436,12 @@ class Viewport:
         cam.up = up
         self.frame_all()
 
-    def frame_all(self, margin: float = 0.14) -> None:
-        """Fit the character and its targets in the view, keeping the viewing direction."""
+    def frame_all(self, margin: float = 0.14, extra: np.ndarray | None = None) -> None:
+        """Fit the character, its targets and ``extra`` points (m, 3) [m] in the view, keeping the viewing direction."""
         cam = self.plotter.camera
         P = self.doc.world_positions()
         T = np.array([t.position for t in self.doc.targets.values()]).reshape(-1, 3)
-        pts = np.vstack([P, T])
+        pts = np.vstack([P, T] if extra is None else [P, T, np.asarray(extra, dtype=float).reshape(-1, 3)])
         center = (pts.min(axis=0) + pts.max(axis=0)) / 2
         back = np.array(cam.position) - np.array(cam.focal_point)
         back /= np.linalg.norm(back)

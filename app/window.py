@@ -7,7 +7,9 @@ signal blockers, so that showing a value never writes it back.
 
 Two ``QTimer`` drive the frame loop: ``timer`` steps the solver once per
 frame while the targets and the pose disagree (it stops when the solver
-reports converged or best reach), ``play_timer`` shows playback frames.
+reports converged or best reach), ``play_timer`` runs while the document's
+timeline plays and shows the frame its clock says (frames are dropped when
+drawing is slow; the motion never slows down).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from PySide6.QtCore import Qt
 
 import gsik
+from gsik.anim.motion import Motion
 from gsik_studio import animations
 from gsik_studio.actions import VIEW_KEYS, make_actions, make_menus, make_toolbar
 from gsik_studio.files import FileActions
@@ -28,9 +31,11 @@ from gsik_studio.widgets import nice
 from gsik_studio.widgets.balance_panel import balance_panel
 from gsik_studio.widgets.effectors import EffectorsPanel
 from gsik_studio.widgets.joint_panel import JointPanel
+from gsik_studio.widgets.library import LibraryPanel
 from gsik_studio.widgets.selected import SelectedTargetPanel
 from gsik_studio.widgets.solver_panel import solver_panel
 from gsik_studio.widgets.status import StatusReadouts
+from gsik_studio.widgets.timeline_bar import TimelineBar
 
 FRAME_INTERVAL_MS = 16  # ~60 Hz
 
@@ -64,6 +69,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.doc = doc if doc is not None else Document()
         self.loop = FrameLoop(self.doc)
         self.run_timers = run_timers
+        self.others: list[MainWindow] = []  # windows of documents imported from this one
 
         self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
         self.plotter.installEventFilter(self)  # VTK's own key bindings ('e', 'q', 'w', ...) are not wanted
@@ -76,14 +82,16 @@ class MainWindow(QtWidgets.QMainWindow):
         self.joints = JointEditor(self.doc)
         self.rings = JointRings(self.viewport, self.joints)
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
-                                 self._show_opened)
+                                 self._show_opened, self.open_document)
         self._make_actions()
         self._make_panel()
+        self._make_timeline_bar()
         self.status = StatusReadouts(self.statusBar(), self.doc, self.loop)
         self.timer = QtCore.QTimer(self)
         self.timer.setInterval(FRAME_INTERVAL_MS)
         self.timer.timeout.connect(self.tick)
         self.play_timer = QtCore.QTimer(self)
+        self.play_timer.setInterval(FRAME_INTERVAL_MS)
         self.play_timer.timeout.connect(self._play_tick)
         self._connect()
         self._restore_geometry()
@@ -120,7 +128,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.balance_panel = balance_panel(self.doc, self.settings, self.show_support)
         self.balance_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
         self.balance_panel.restore()
-        for box in (self.effectors, self.selected, self.joint_panel, self.balance_panel, self.solver_panel):
+        self.library_panel = LibraryPanel(self.doc, lambda text: self.statusBar().showMessage(text, 6000))
+        for box in (self.effectors, self.selected, self.joint_panel, self.balance_panel, self.library_panel,
+                    self.solver_panel):
             layout.addWidget(box)
         layout.addStretch(1)
         scroll = QtWidgets.QScrollArea()
@@ -134,8 +144,18 @@ class MainWindow(QtWidgets.QMainWindow):
         dock.setMinimumWidth(440)
         self.addDockWidget(Qt.RightDockWidgetArea, dock)
 
+    def _make_timeline_bar(self) -> None:
+        self.timeline_bar = TimelineBar(self.doc.timeline, lambda text: self.statusBar().showMessage(text, 6000))
+        dock = QtWidgets.QDockWidget("Timeline", self)
+        dock.setObjectName("timeline_panel")
+        dock.setWidget(self.timeline_bar)
+        dock.setFeatures(QtWidgets.QDockWidget.DockWidgetMovable | QtWidgets.QDockWidget.DockWidgetFloatable)
+        self.addDockWidget(Qt.BottomDockWidgetArea, dock)
+
     def _connect(self) -> None:
         ev = self.doc.events
+        self.doc.timeline.events.state.connect(self._timeline_state)
+        self.doc.timeline.events.content.connect(self._frame_timeline)
         ev.pose.connect(self._show_root)
         for signal in (ev.pose, ev.targets, ev.options):
             signal.connect(self._show_targets)
@@ -226,6 +246,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _show_root(self) -> None:
         root = self.doc.root
         for a, name in ((self.act_root_left, "left_foot"), (self.act_root_right, "right_foot")):
+            a.setEnabled(name in self.doc.skeleton.frame_names)  # an imported skeleton may have no feet
             with QtCore.QSignalBlocker(a):
                 a.setChecked(root == name)
 
@@ -260,6 +281,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.viewport.render()
 
     # -- commands -----------------------------------------------------------------------------
+    def open_document(self, doc: Document) -> MainWindow:
+        """Show ``doc`` (an imported skeleton) in a new window like this one; returns it."""
+        window = type(self)(doc, settings=self.settings, run_timers=self.run_timers)
+        window.resize(self.size())
+        window.show()
+        self.others.append(window)  # kept alive with this window
+        return window
+
     def set_root(self, name: str) -> None:
         self.doc.set_root(name)
         self.statusBar().showMessage(f"IK root is now the {nice(name)}; the pose stays where it is", 4000)
@@ -272,6 +301,7 @@ class MainWindow(QtWidgets.QMainWindow):
             QtWidgets.QStyle.SP_MediaPlay if paused else QtWidgets.QStyle.SP_MediaPause))
         if paused:
             self.timer.stop()
+            self.doc.timeline.pause()  # Pause stops everything that moves
         self.loop.set_paused(paused)
 
     def set_body(self, mode: str) -> None:
@@ -299,14 +329,23 @@ class MainWindow(QtWidgets.QMainWindow):
             self.statusBar().showMessage(f"Redone: {self.doc.history.undo_text}", 3000)
 
     # -- playback -----------------------------------------------------------------------------
-    def play(self, frames, text: str = "Play", frame_time: float = 1 / 30) -> Playback:
-        """Play a :class:`gsik.anim.motion.Motion` or a sequence of target dicts in the view."""
+    def play(self, frames, text: str = "Play", frame_time: float = 1 / 30) -> Playback | None:
+        """Put a :class:`gsik.anim.motion.Motion` or a sequence of target dicts on the timeline and play it.
+
+        Returns the playback showing its frames (None, saying why, when the frames cannot be solved).
+        """
         self.stop_playback()
-        pb = self.loop.play(frames, text, frame_time)
-        self.timer.stop()
-        self.play_timer.setInterval(max(1, int(round(pb.frame_time * 1000))))
-        self.play_timer.start()
-        return pb
+        tl = self.doc.timeline
+        try:
+            if isinstance(frames, Motion):
+                tl.load(frames, text)
+            else:
+                tl.load_target_frames(frames, text, frame_time)
+        except gsik.GsikError as exc:
+            self.statusBar().showMessage(f"Could not play {text}: {exc}", 8000)
+            return None
+        tl.play()
+        return self.doc.playing
 
     def play_walk(self, n_steps: int = 4) -> Playback | None:
         """Solve a walk with :func:`gsik.anim.gait.walk` from the standing pose and play it."""
@@ -339,19 +378,28 @@ class MainWindow(QtWidgets.QMainWindow):
         return None
 
     def _play_tick(self) -> None:
-        if not self.loop.play_frame():
-            self._playback_ended()
+        self.doc.timeline.tick()  # the document's pose event draws the frame; the end says events.state
 
-    def _playback_ended(self) -> None:
-        self.play_timer.stop()
-        self.viewport.frame_all()
-        self.viewport.render()
+    def _timeline_state(self) -> None:
+        """Run the play clock exactly while the timeline plays; the camera stays where it is at the end."""
+        if self.doc.timeline.playing:
+            self.timer.stop()
+            self.play_timer.start()
+        else:
+            self.play_timer.stop()
+            self.loop.wake()
+        self.loop.readouts_now()
+
+    def _frame_timeline(self) -> None:
+        """A new clip: frame every pose it will show, so it plays in view without the camera moving."""
+        m = self.doc.timeline.clip
+        if m is not None:
+            self.viewport.frame_all(extra=m.positions().reshape(-1, 3))
+            self.viewport.render()
 
     def stop_playback(self) -> None:
-        """End a running playback here (it stays, as one undo step)."""
-        if self.play_timer.isActive():
-            self.loop.stop_playback()
-            self._playback_ended()
+        """Pause the timeline here (what played stays, as one undo step)."""
+        self.doc.timeline.pause()
 
     # -- pictures -------------------------------------------------------------------------------
     def grab_window(self) -> QtGui.QImage:

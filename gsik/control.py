@@ -123,6 +123,7 @@ class Controller:
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
         self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
+        self._layout = None  # (effector names, result names, task index of each) for results
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
         names = [t.name for t in self._tasks]
@@ -164,6 +165,21 @@ class Controller:
         err[0, self._row_w[:, 0] <= 0.0] = 0.0
         err[1, self._row_w[:, 3] <= 0.0] = 0.0
         return err[0], err[1]
+
+    def report(self, effector_names: tuple[str, ...], R, p) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
+        """``(names, position errors [m], orientation errors [rad])``: every effector (0 without a target),
+        then the other targeted frames."""
+        if self._layout is None or self._layout[0] != effector_names:
+            names = effector_names + tuple(n for n in self.names if n not in effector_names)
+            where = {n: k for k, n in enumerate(self.names)}
+            self._layout = (effector_names, names, np.array([where.get(n, -1) for n in names], dtype=np.int64))
+        _, names, index = self._layout
+        pos, ori = self.errors(R, p)
+        out = np.zeros((2, len(names)))
+        has = index >= 0
+        out[0, has] = pos[index[has]]
+        out[1, has] = ori[index[has]]
+        return names, out[0], out[1]
 
     def _task_errors(self, R, p) -> None:
         kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,

@@ -504,19 +504,19 @@ class Solver:
         self._ws.x[:] = 0.0
 
     # -- artist control: priorities, targets on any frame, posture, balance ------------------
-    def set_posture(self, q=None, weights=1.0) -> None:
+    def set_posture(self, q=None, weights=None) -> None:
         """Prefer the pose ``q`` (n_dofs,) [rad] (default: the rest pose), below every target.
 
         The posture is the lowest priority level: it only chooses among the
         poses that meet the targets as well as they can be met, so it never
-        costs target accuracy. ``weights``: a scalar or one per DOF (n_dofs,)
-        (>= 0; 0 turns the posture off), or a symmetric positive semi-definite
+        costs target accuracy. ``weights``: ``None`` (1 for every DOF), a
+        scalar or one per DOF (n_dofs,) (>= 0; 0 turns the posture off), or a symmetric positive semi-definite
         precision matrix (n_dofs, n_dofs); the posture minimises
         ``(q - q_ref)^T P (q - q_ref)`` with ``P = diag(weights)`` or that matrix.
         """
         sk = self._skeleton
         ref = sk.rest.copy() if q is None else np.clip(sk.validate_q(q), sk.lower, sk.upper)
-        P = _posture_precision(weights, sk.n_dofs)
+        P = _posture_precision(1.0 if weights is None else weights, sk.n_dofs)
         self._posture = None if not np.any(P) else control.Posture(ref, P)
         self._pack_targets()
 
@@ -611,15 +611,8 @@ class Solver:
     def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
                         attempts: int) -> SolveResult:
         """A result naming every effector, then the other targeted frames, with their errors."""
-        c = self._make_controller()
-        pos, ori = c.errors(self._ws.R, self._ws.p)
-        names = self._topo.effector_names + tuple(n for n in c.names if n not in self._topo.effector_names)
-        where = {n: k for k, n in enumerate(c.names)}
-        out = np.zeros((2, len(names)))
-        for k, n in enumerate(names):
-            if n in where:
-                out[:, k] = pos[where[n]], ori[where[n]]
-        return SolveResult(self._q.copy(), status, iterations, 0, residual, names, out[0], out[1], step_norm, attempts)
+        names, pos, ori = self._make_controller().report(self._topo.effector_names, self._ws.R, self._ws.p)
+        return SolveResult(self._q.copy(), status, iterations, 0, residual, names, pos, ori, step_norm, attempts)
 
 
 def _posture_precision(weights, n: int) -> np.ndarray:

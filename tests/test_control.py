@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 import gsik
 from gsik import Solver, Target
 from gsik.balance import signed_distance, support_polygon
+from gsik.kinematics import jacobian, world_frames
 from gsik.benchmark import HELD_AT_LEVEL_0 as LEVEL_0
 from gsik.benchmark import hand_pull_targets as _pull
 
@@ -163,3 +164,19 @@ def test_prioritised_steps_never_leave_the_limits(biped, seed):
     for _ in range(5):
         q = solver.step(targets).q
         assert np.all(q >= biped.lower) and np.all(q <= biped.upper)
+
+
+@pytest.mark.parametrize("root", ["right_foot", "pelvis"])
+def test_jacobian_of_joint_frames_matches_finite_differences(biped, rng, root):
+    names = ["left_knee", "waist", "right_ankle", "atlas", "right_elbow"]
+    q = biped.clip(biped.rest + rng.normal(scale=0.3, size=biped.n_dofs))
+    W = biped.frame_transforms(q)[biped.frame_of(root)]
+    J = jacobian(biped, q, names, root, W)
+    frames = [biped.frame_of(n) for n in names]
+
+    def positions(qq):
+        return world_frames(biped, qq, W, root)[1][frames].reshape(-1)
+
+    h = 1e-6
+    fd = np.column_stack([(positions(q + h * e) - positions(q - h * e)) / (2 * h) for e in np.eye(biped.n_dofs)])
+    np.testing.assert_allclose(J.reshape(len(names), 6, -1)[:, :3].reshape(-1, biped.n_dofs), fd, atol=1e-8)

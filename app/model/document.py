@@ -29,9 +29,11 @@ from gsik.targets import Target
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
 from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
+from gsik_studio.model.library import PoseLibrary
 from gsik_studio.model.mirror import mirror_map
-from gsik_studio.model.pins import PINNED_BY_DEFAULT, SolveControls, pin_level
+from gsik_studio.model.pins import SolveControls, default_levels
 from gsik_studio.model.poses import RootPlacement, check_pose, driven_target, standing_pose, target_at
+from gsik_studio.model.timeline import Timeline
 
 if TYPE_CHECKING:
     from gsik_studio.model.playback import Playback
@@ -74,13 +76,10 @@ class Document:
         self._playback: Playback | None = None
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
         self.controls = SolveControls(self.solver, self._push_targets)
-        self._restore(self._standing())
+        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT, default_levels(self.skeleton)))
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
-
-    def _standing(self) -> Pose:
-        """The standing pose of a new document: feet and pelvis pinned (:data:`pins.PINNED_BY_DEFAULT`)."""
-        return standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT,
-                             {n: pin_level(n in PINNED_BY_DEFAULT) for n in self.skeleton.effector_sites})
+        self.timeline = Timeline(self)  # the motion kept with the pose
+        self.library = PoseLibrary(self)  # named poses, undone with the pose
 
     # -- read-outs -------------------------------------------------------------
     @property
@@ -190,9 +189,10 @@ class Document:
         merging = self.history.would_merge(merge_key)
         before = self.history.commands[-1].before if merging else self.pose()  # a drag keeps its first "before"
         file_state = self._file_state()
+        library = self.library.snapshot()
         apply()
         self.needs_solving = True
-        self.history.push(Command(text, before, merge_key=merge_key))
+        self.history.push(Command(text, before, merge_key=merge_key, library_before=library))
         (signal or self.events.pose).emit()
         if not merging:
             self.events.history.emit()
@@ -360,9 +360,10 @@ class Document:
             return False
         file_state = self._file_state()
         cmd = self.history.commands[self.history.index - 1]
-        cmd.after = self.pose()
+        cmd.after, cmd.library_after = self.pose(), self.library.snapshot()
         cmd.merge_key = None
         self._restore(cmd.before)
+        self.library.restore(cmd.library_before)
         self.history.index -= 1
         self._replaced(file_state)
         return True
@@ -373,7 +374,9 @@ class Document:
         if not self.history.can_redo:
             return False
         file_state = self._file_state()
-        self._restore(self.history.commands[self.history.index].after)
+        cmd = self.history.commands[self.history.index]
+        self._restore(cmd.after)
+        self.library.restore(cmd.library_after)
         self.history.index += 1
         self._replaced(file_state)
         return True
@@ -405,6 +408,7 @@ class Document:
         self._interrupt_playback()
         file_state = self._file_state()
         self._restore(read.pose)
+        self.library.restore(read.library)
         self.history.clear()
         self.path = str(path)
         if read.warnings:
@@ -422,7 +426,7 @@ class Document:
         if not target:
             raise gsik.GsikFileError("no file name to save to (use Save As)")
         file_state = self._file_state()
-        write_pose(target, self.pose())
+        write_pose(target, self.pose(), self.library.snapshot())
         self.path = str(target)
         self.history.set_clean()
         self._emit_file(file_state)
@@ -431,7 +435,9 @@ class Document:
         """The standing pose, no file, empty history."""
         self._interrupt_playback()
         file_state = self._file_state()
-        self._restore(self._standing())
+        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT, default_levels(self.skeleton)))
+        self.library.restore(())
+        self.timeline.clear()
         self.history.clear()
         self.path = None
         self._replaced(file_state)
@@ -486,6 +492,6 @@ class Document:
         if self._playback is playback:
             self._playback = None
         file_state = self._file_state()
-        self.history.push(Command(playback.text, playback.before))
+        self.history.push(Command(playback.text, playback.before, library_before=self.library.snapshot()))
         self.needs_solving = True
         self._replaced(file_state)

@@ -41,6 +41,11 @@ def pin_level(pinned: bool) -> int:
     return PINNED if pinned else FREE
 
 
+def default_levels(skeleton: gsik.Skeleton) -> dict[str, int]:
+    """``{effector site: level}`` of a new document: :data:`PINNED_BY_DEFAULT` pinned, the others free."""
+    return {n: pin_level(n in PINNED_BY_DEFAULT) for n in skeleton.effector_sites}
+
+
 class Support(NamedTuple):
     """Where the body stands, for drawing.
 

@@ -49,14 +49,17 @@ class Playback:
         if self.index >= self.n_frames:
             self.stop()
             return False
-        i = self.index
+        self.show(self.index)
+        return True
+
+    def show(self, i: int) -> None:
+        """Show frame ``i`` (0 <= i < :attr:`n_frames`); the next :meth:`advance` shows ``i + 1``."""
         if self.motion is not None:
             m = self.motion
             self.doc.show_motion_frame(m.roots[i], m.world_from_root[i], m.q[i])
         else:
             self.doc.drive_targets(self.target_frames[i])
-        self.index += 1
-        return True
+        self.index = i + 1
 
     def stop(self) -> None:
         """End the playback here and record it as one undo step."""

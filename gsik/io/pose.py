@@ -37,6 +37,10 @@ Rules:
   normalised.
 - An angle outside its joint's limits is clamped into them and reported as
   a warning in :attr:`PoseRead.warnings` (never silently).
+- A file may also hold a ``library``: a list of named poses, each a mapping
+  of ``name`` (unique) and the four pose fields above (``root``,
+  ``root_transform``, ``joints``, ``targets``), read into
+  :attr:`PoseRead.library`. A file without it is a single pose, as before.
 - Numbers are written with Python's shortest exact ``repr``, so writing a
   pose and reading it back gives exactly the same numbers.
 
@@ -48,7 +52,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, NamedTuple
@@ -72,7 +76,9 @@ QUATERNION_NORM_TOLERANCE = 0.01
 #: Angles within this of a limit [rad] count as inside it (no warning).
 LIMIT_TOLERANCE = 1e-9
 
-_TOP_KEYS = ("format", "skeleton", "root", "root_transform", "joints", "targets")
+_POSE_KEYS = ("root", "root_transform", "joints", "targets")
+_TOP_KEYS = ("format", "skeleton", *_POSE_KEYS)
+_LIBRARY_KEY = "library"
 _TRANSFORM_KEYS = ("position", "orientation")
 _TARGET_KEYS = ("position", "orientation", "enabled", "weight", "position_only", "priority")
 
@@ -153,10 +159,13 @@ class PoseRead(NamedTuple):
         pose: The validated :class:`Pose` (angles clamped into the limits).
         warnings: One sentence per problem that was repaired (an angle
             clamped into its limits); empty when the file was clean.
+        library: The file's named poses ``((name, Pose), ...)`` in file order
+            (empty for a single-pose file).
     """
 
     pose: Pose
     warnings: tuple[str, ...]
+    library: tuple[tuple[str, Pose], ...] = ()
 
 
 # -- reading -----------------------------------------------------------------
@@ -270,16 +279,39 @@ def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> Pos
     """
     data, lines = _parse(text, source)
     r = _Reader(source, lines)
-    top = r.mapping(data, (), _TOP_KEYS)
+    top = r.mapping(data, (), _TOP_KEYS, (_LIBRARY_KEY,))
     _check_header(r, top, skeleton)
-    root = _read_root(r, top["root"], skeleton)
-    rt = r.mapping(top["root_transform"], ("root_transform",), _TRANSFORM_KEYS)
-    root_position = r.vector(rt["position"], 3, ("root_transform", "position"))
-    root_orientation = r.quaternion(rt["orientation"], ("root_transform", "orientation"))
-    joints, warnings = _read_joints(r, top["joints"], skeleton)
-    targets = _read_targets(r, top["targets"], tuple(n for n in skeleton.effector_sites if n != root), root)
-    pose = Pose(skeleton.name, root, root_position, root_orientation, joints, targets)
-    return PoseRead(pose, tuple(warnings))
+    pose, warnings = _read_pose_fields(r, top, (), skeleton)
+    library = _read_library(r, top.get(_LIBRARY_KEY, []), skeleton, warnings)
+    return PoseRead(pose, tuple(warnings), library)
+
+
+def _read_pose_fields(r: _Reader, fields: dict, at: tuple, skeleton: Skeleton) -> tuple[Pose, list[str]]:
+    """One pose from the fields of :data:`_POSE_KEYS` found at key path ``at``; and its warnings."""
+    root = _read_root(r, fields["root"], skeleton, at)
+    rt = r.mapping(fields["root_transform"], at + ("root_transform",), _TRANSFORM_KEYS)
+    root_position = r.vector(rt["position"], 3, at + ("root_transform", "position"))
+    root_orientation = r.quaternion(rt["orientation"], at + ("root_transform", "orientation"))
+    joints, warnings = _read_joints(r, fields["joints"], skeleton, at)
+    targets = _read_targets(r, fields["targets"], tuple(n for n in skeleton.effector_sites if n != root), root, at)
+    return Pose(skeleton.name, root, root_position, root_orientation, joints, targets), warnings
+
+
+def _read_library(r: _Reader, entries, skeleton: Skeleton, warnings: list[str]) -> tuple[tuple[str, Pose], ...]:
+    """The ``library`` list: one mapping per named pose (``name`` and the pose fields); names unique."""
+    if not isinstance(entries, list):
+        r.fail((_LIBRARY_KEY,), f"must be a list of named poses, got {_show(entries)}")
+    out: list[tuple[str, Pose]] = []
+    for i, entry in enumerate(entries):
+        at = (_LIBRARY_KEY, i)
+        fields = r.mapping(entry, at, ("name", *_POSE_KEYS))
+        name = r.name(fields["name"], at + ("name",))
+        if name in dict(out):
+            r.fail(at + ("name",), f"duplicate pose name {name!r}; names so far: {choices(dict(out))}")
+        pose, more = _read_pose_fields(r, fields, at, skeleton)
+        warnings += more
+        out.append((name, pose))
+    return tuple(out)
 
 
 def _parse(text: str, source: str) -> tuple[Any, dict]:
@@ -314,49 +346,53 @@ def _check_header(r: _Reader, top: dict, skeleton: Skeleton) -> None:
         r.fail(("skeleton",), f"pose is for skeleton {name!r}, but the skeleton is {skeleton.name!r}")
 
 
-def _read_root(r: _Reader, value, skeleton: Skeleton) -> str:
-    root = r.name(value, ("root",))
+def _read_root(r: _Reader, value, skeleton: Skeleton, at: tuple = ()) -> str:
+    root = r.name(value, at + ("root",))
     if root not in skeleton.joint_names and root not in skeleton.site_names:
-        r.fail(("root",), f"unknown root {root!r}; valid: {choices(skeleton.effector_sites)} "
+        r.fail(at + ("root",), f"unknown root {root!r}; valid: {choices(skeleton.effector_sites)} "
                           f"(or any joint or site: {choices(skeleton.joint_names + skeleton.site_names)})")
     return root
 
 
-def _require_names(r: _Reader, given: dict, field: str, valid: tuple[str, ...], what: tuple[str, str],
+def _require_names(r: _Reader, given: dict, field: tuple, valid: tuple[str, ...], what: tuple[str, str],
                    why=lambda key: "") -> None:
     """Every key of ``given`` is one of ``valid`` and every one of ``valid`` is given; ``what``: (key, value) nouns."""
     for key in given:
         if key not in valid:
-            r.fail((field, key), f"unknown {what[0]} {key!r}{why(key)}; valid: {choices(valid)}")
+            r.fail(field + (key,), f"unknown {what[0]} {key!r}{why(key)}; valid: {choices(valid)}")
     missing = [n for n in valid if n not in given]
     if missing:
-        r.fail((field,), f"missing {what[1]}(s) for {choices(missing)}")
+        r.fail(field, f"missing {what[1]}(s) for {choices(missing)}")
 
 
-def _read_joints(r: _Reader, joints_in, skeleton: Skeleton) -> tuple[dict[str, float], list[str]]:
+def _read_joints(r: _Reader, joints_in, skeleton: Skeleton, at: tuple = ()) -> tuple[dict[str, float], list[str]]:
     """``{DOF: angle [rad]}`` clamped into the limits, and one warning per clamped angle."""
+    here = at + ("joints",)
     if not isinstance(joints_in, dict):
-        r.fail(("joints",), f"must be a mapping of DOF name to angle [rad], got {_show(joints_in)}")
-    _require_names(r, joints_in, "joints", skeleton.dof_names, ("joint", "angle"))
+        r.fail(here, f"must be a mapping of DOF name to angle [rad], got {_show(joints_in)}")
+    _require_names(r, joints_in, here, skeleton.dof_names, ("joint", "angle"))
     joints, warnings = {}, []
     for i, dof in enumerate(skeleton.dof_names):
-        v = r.number(joints_in[dof], ("joints", dof))
+        v = r.number(joints_in[dof], here + (dof,))
         lo, hi = float(skeleton.lower[i]), float(skeleton.upper[i])
         if v < lo - LIMIT_TOLERANCE or v > hi + LIMIT_TOLERANCE:
             clamped = min(max(v, lo), hi)
-            warnings.append(f"{r.source}:{r.lines.get(('joints', dof))}: joints.{dof}: angle {v!r} rad is outside "
+            field = ".".join(str(k) for k in here + (dof,))
+            warnings.append(f"{r.source}:{r.lines.get(here + (dof,))}: {field}: angle {v!r} rad is outside "
                             f"its limits [{lo!r}, {hi!r}]; clamped to {clamped!r}")
             v = clamped
         joints[dof] = v
     return joints, warnings
 
 
-def _read_targets(r: _Reader, targets_in, effectors: tuple[str, ...], root: str) -> dict[str, Target]:
+def _read_targets(r: _Reader, targets_in, effectors: tuple[str, ...], root: str,
+                  at: tuple = ()) -> dict[str, Target]:
+    here = at + ("targets",)
     if not isinstance(targets_in, dict):
-        r.fail(("targets",), f"must be a mapping of effector name to target, got {_show(targets_in)}")
-    _require_names(r, targets_in, "targets", effectors, ("effector", "target"),
+        r.fail(here, f"must be a mapping of effector name to target, got {_show(targets_in)}")
+    _require_names(r, targets_in, here, effectors, ("effector", "target"),
                    lambda key: " (it is the IK root)" if key == root else "")
-    return {eff: _read_target(r, targets_in[eff], ("targets", eff)) for eff in effectors}
+    return {eff: _read_target(r, targets_in[eff], here + (eff,)) for eff in effectors}
 
 
 def _read_target(r: _Reader, value, path: tuple) -> Target:
@@ -403,18 +439,18 @@ def _list(values) -> str:
 
 def _name(text: str) -> str:
     """A YAML key or value for a name: plain when it reads back as the same string, else quoted."""
-    plain = yaml.safe_load(f"{text}: 0") if text else None
+    try:
+        plain = yaml.safe_load(f"{text}: 0") if text else None
+    except yaml.YAMLError:  # "a: b" is not a plain key
+        plain = None
     if isinstance(plain, dict) and list(plain) == [text]:
         return text
     return yaml.safe_dump(text, default_style='"').strip().removesuffix("...").strip()
 
 
-def pose_to_yaml(pose: Pose) -> str:
-    """The YAML text of ``pose`` (the format of the module docstring)."""
+def _pose_lines(pose: Pose, indent: str) -> list[str]:
+    """The lines of the pose fields (:data:`_POSE_KEYS`), each starting with ``indent``."""
     out = [
-        "# gsik pose (format documented in gsik/pose.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
-        f"format: {POSE_FORMAT}",
-        f"skeleton: {_name(pose.skeleton)}",
         f"root: {_name(pose.root)}",
         "root_transform:",
         f"  position: {_list(pose.root_position)}",
@@ -434,15 +470,33 @@ def pose_to_yaml(pose: Pose) -> str:
         ]
         if t.priority:  # written only when set: files of single-level poses stay as they were
             out.append(f"    priority: {t.priority}")
+    return [indent + line for line in out]
+
+
+def pose_to_yaml(pose: Pose, library: Sequence[tuple[str, Pose]] = ()) -> str:
+    """The YAML text of ``pose`` (the format of the module docstring), with a ``library`` list of named poses if any."""
+    out = [
+        "# gsik pose (format documented in gsik/pose.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
+        f"format: {POSE_FORMAT}",
+        f"skeleton: {_name(pose.skeleton)}",
+        *_pose_lines(pose, ""),
+    ]
+    if library:
+        out.append(f"{_LIBRARY_KEY}:")
+        for name, p in library:
+            if p.skeleton != pose.skeleton:
+                raise PoseError(f"library pose {name!r} is for skeleton {p.skeleton!r}, not {pose.skeleton!r}")
+            lines = _pose_lines(p, "    ")
+            out += [f"  - name: {_name(name)}", *lines]
     return "\n".join(out) + "\n"
 
 
-def write_pose(path: str | os.PathLike, pose: Pose) -> None:
-    """Write ``pose`` to ``path`` atomically (temporary file, fsync, rename).
+def write_pose(path: str | os.PathLike, pose: Pose, library: Sequence[tuple[str, Pose]] = ()) -> None:
+    """Write ``pose`` (and a ``library`` of named poses, if any) to ``path`` atomically (temporary file, fsync, rename).
 
     Raises:
         GsikFileError: the file cannot be written; an existing file is left untouched.
     """
     if not isinstance(pose, Pose):
         raise PoseError(f"write_pose needs a Pose, got {type(pose).__name__}")
-    atomic_write_text(path, pose_to_yaml(pose))
+    atomic_write_text(path, pose_to_yaml(pose, library))

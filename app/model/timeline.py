@@ -1,0 +1,258 @@
+"""The document's timeline: a clip (a walk, a scenario, an imported BVH) or keyed poses, played from the wall clock.
+
+Plain Python. The frame shown while playing is chosen from the clock
+(``frame = start_frame + elapsed / frame_time``), so a slow machine drops
+frames instead of slowing the motion down. The clip stays on the timeline
+after it played (scrub it, play it again) until :meth:`Timeline.discard`.
+
+Every stretch of frames shown (one play until pause or stop, one scrub) is a
+:class:`gsik_studio.model.playback.Playback` of the document: an edit, undo or
+load interrupts it, and it is recorded as one undo step.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING
+
+from gsik.anim.motion import Motion
+from gsik.errors import GsikError
+from gsik.io.pose import Pose
+from gsik.targets import Target
+from gsik_studio.model.events import Signal
+from gsik_studio.model.keys import bake_keys, bake_target_frames
+
+if TYPE_CHECKING:
+    from gsik_studio.model.document import Document
+    from gsik_studio.model.playback import Playback
+
+#: Frame time of keyed sequences [s] (30 frames per second).
+KEY_FRAME_TIME = 1 / 30
+
+
+class TimelineEvents:
+    """Signals of a :class:`Timeline` (no arguments).
+
+    Attributes:
+        frame: The current frame changed.
+        content: The clip or the keys changed (length, key marks).
+        state: Playing, paused or looping changed.
+    """
+
+    __slots__ = ("frame", "content", "state")
+
+    def __init__(self):
+        for name in self.__slots__:
+            setattr(self, name, Signal())
+
+
+class Timeline:
+    """A clip or a key sequence on a document, with play, pause, stop, loop and scrub.
+
+    Args:
+        doc: The document whose pose shows the current frame.
+        clock: Seconds from a monotonic clock (tests pass a fake one).
+
+    Attributes:
+        clip: The motion on the timeline (None: the keys play, if any).
+        name: The clip's name (undo texts: "Walk", "Scrub Walk").
+        keys: ``{frame: Pose}`` keyed poses (used when there is no clip).
+        frame: The current frame index.
+        playing: True while the clock moves the frame.
+        loop: True to start over at the end instead of stopping there.
+    """
+
+    def __init__(self, doc: Document, clock: Callable[[], float] = time.perf_counter):
+        self.doc = doc
+        self.clock = clock
+        self.events = TimelineEvents()
+        self.clip: Motion | None = None
+        self.name = ""
+        self.keys: dict[int, Pose] = {}
+        self.frame = 0
+        self.playing = False
+        self.loop = False
+        self._baked: Motion | None = None  # the keys as a motion, until they change
+        self._session: Playback | None = None
+        self._start = (0.0, 0)  # (clock, frame) when playing started
+
+    # -- content ------------------------------------------------------------------------
+    @property
+    def motion(self) -> Motion | None:
+        """What plays: the clip, else the keys baked into a motion, else None."""
+        if self.clip is not None:
+            return self.clip
+        if self.keys and self._baked is None:
+            self._baked = bake_keys(self.doc.skeleton, self.doc.settings, self.keys, KEY_FRAME_TIME)
+        return self._baked
+
+    @property
+    def n_frames(self) -> int:
+        """Frames on the timeline: the clip's, else up to the last key (at least the current frame)."""
+        if self.clip is not None:
+            return self.clip.n_frames
+        return max([self.frame, *self.keys]) + 1 if self.keys else 1
+
+    @property
+    def frame_time(self) -> float:
+        """Seconds per frame [s]."""
+        return float(self.clip.frame_time) if self.clip is not None else KEY_FRAME_TIME
+
+    def load(self, motion: Motion, name: str) -> None:
+        """Put a motion on the timeline (replacing any clip), at frame 0, not playing."""
+        if motion.skeleton.name != self.doc.skeleton.name:
+            raise GsikError(f"motion is for skeleton {motion.skeleton.name!r}, not {self.doc.skeleton.name!r}")
+        self.pause()
+        self.clip, self.name, self.frame = motion, name, 0
+        self.events.content.emit()
+        self.events.frame.emit()
+
+    def load_target_frames(self, frames: Sequence[Mapping[str, Target | None]], name: str,
+                           frame_time: float) -> None:
+        """Solve target frames from the document's pose (one solver step each, as live) and load them."""
+        self.load(bake_target_frames(self.doc.skeleton, self.doc.settings, self.doc.pose(), frames, frame_time),
+                  name)
+
+    def discard(self) -> None:
+        """Take the clip off the timeline (the pose shown stays)."""
+        self.pause()
+        self.clip, self.name, self.frame = None, "", 0
+        self.events.content.emit()
+        self.events.frame.emit()
+
+    def clear(self) -> None:
+        """An empty timeline: no clip, no keys, frame 0 (a new document)."""
+        self.pause()
+        self.clip, self.name, self.frame, self.keys, self._baked = None, "", 0, {}, None
+        self.events.content.emit()
+        self.events.frame.emit()
+
+    # -- keys -----------------------------------------------------------------------------
+    def _keys_changed(self) -> None:
+        self._baked = None
+        self.events.content.emit()
+
+    def add_key(self, frame: int | None = None) -> int:
+        """Key the document's pose at ``frame`` (default: the current frame); returns the frame."""
+        if self.clip is not None:
+            raise GsikError(f"the timeline holds the clip {self.name!r}: discard it before keying poses")
+        f = self.frame if frame is None else self._check_frame(frame, allow_past_end=True)
+        self.keys[f] = self.doc.pose()
+        self._keys_changed()
+        return f
+
+    def move_key(self, old: int, new: int) -> None:
+        """Move the key at frame ``old`` to frame ``new`` (replacing a key there)."""
+        self._key(old)
+        self.keys[self._check_frame(new, allow_past_end=True)] = self.keys.pop(old)
+        self._keys_changed()
+
+    def delete_key(self, frame: int) -> None:
+        self._key(frame)
+        del self.keys[frame]
+        self._keys_changed()
+
+    def _key(self, frame: int) -> Pose:
+        if frame not in self.keys:
+            raise GsikError(f"no key at frame {frame}; keys at {sorted(self.keys) or 'no frame'}")
+        return self.keys[frame]
+
+    def _check_frame(self, frame: int, allow_past_end: bool = False) -> int:
+        f = int(frame)
+        if f < 0 or (not allow_past_end and f >= self.n_frames):
+            raise GsikError(f"frame {frame} is outside the timeline (0 .. {self.n_frames - 1})")
+        return f
+
+    # -- transport ------------------------------------------------------------------------
+    def _open_session(self, text: str) -> Playback | None:
+        """The playback that shows frames (a new one if none runs); None when there is nothing to play."""
+        m = self.motion
+        if m is None:
+            return None
+        if self._session is None or self._session.finished:
+            self._session = self.doc.playback(m, text, m.frame_time)
+        return self._session
+
+    def _close_session(self) -> None:
+        if self._session is not None:
+            session, self._session = self._session, None
+            session.stop()  # recorded as one undo step
+
+    def _show(self, frame: int) -> None:
+        self.frame = frame
+        self._session.show(frame)
+        self.events.frame.emit()
+
+    def play(self) -> bool:
+        """Start playing from the current frame (from 0 when at the end); False when there is nothing to play."""
+        if self.playing:
+            return True
+        if self.motion is None:
+            return False
+        if self.frame >= self.n_frames - 1:
+            self.frame = 0
+        self._close_session()
+        self._open_session(self.name or "Play keys")
+        self._show(self.frame)
+        self._start = (self.clock(), self.frame)
+        self.playing = True
+        self.events.state.emit()
+        return True
+
+    def pause(self) -> None:
+        """Stop the clock on the current frame (what was played is one undo step)."""
+        self._close_session()
+        if self.playing:
+            self.playing = False
+            self.events.state.emit()
+
+    def stop(self) -> None:
+        """Stop playing and go back to the first frame (one undo step)."""
+        if self._open_session(f"Stop {self.name or 'keys'}") is not None:
+            self._show(0)
+        self.pause()
+
+    def set_loop(self, on: bool) -> None:
+        self.loop = bool(on)
+        self.events.state.emit()
+
+    def scrub(self, frame: int) -> None:
+        """Show ``frame`` (clamped into the timeline); while playing, play on from there."""
+        f = min(max(int(frame), 0), self.n_frames - 1)
+        if self._open_session(f"Scrub {self.name or 'keys'}") is None:
+            self.frame = f
+            self.events.frame.emit()
+            return
+        self._show(f)
+        if self.playing:
+            self._start = (self.clock(), f)
+
+    def end_scrub(self) -> None:
+        """The slider was let go: the frames scrubbed become one undo step (unless playing on)."""
+        if not self.playing:
+            self._close_session()
+
+    def frame_now(self) -> int:
+        """The frame the clock says should be shown now (past the end when not looping)."""
+        t0, f0 = self._start
+        f = f0 + math.floor((self.clock() - t0) / self.frame_time + 1e-9)
+        return f % self.n_frames if self.loop else f
+
+    def tick(self) -> bool:
+        """Show the frame the clock says (dropping any in between); False when playing ended."""
+        if not self.playing:
+            return False
+        if self._session is None or self._session.finished:  # an edit or undo interrupted it
+            self._session = None
+            self.pause()
+            return False
+        f = self.frame_now()
+        if f >= self.n_frames:
+            self._show(self.n_frames - 1)  # the last frame stays: no snapping back
+            self.pause()
+            return False
+        if f != self.frame:
+            self._show(f)
+        return True
