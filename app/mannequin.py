@@ -172,6 +172,8 @@ class BodyMesh:
         faces = (faces_per_solid[None] + (np.arange(s) * k)[:, None, None]).reshape(-1, faces_per_solid.shape[1])
         cells = np.hstack([np.full((len(faces), 1), faces.shape[1]), faces]).ravel() if len(faces) else []
         self.polydata = pv.PolyData(self.local_points.reshape(-1, 3).copy(), faces=np.asarray(cells, dtype=np.int64))
+        if not s:  # a skeleton with no solid of this kind: an empty mesh, nothing to move
+            return
         self.polydata.point_data.set_array(self.local_normals.reshape(-1, 3).copy(), "Normals")
         self.polydata.point_data.active_normals_name = "Normals"
         self.polydata.point_data.set_array(np.repeat(colors, k, axis=0), "colors")

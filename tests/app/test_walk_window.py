@@ -12,7 +12,6 @@ import pytest
 
 pytestmark = pytest.mark.gui
 
-from test_window import boxes, window  # noqa: E402,F401 (the window fixtures)
 
 
 def _pelvis(window):

@@ -16,24 +16,6 @@ pytestmark = pytest.mark.gui
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
-@pytest.fixture()
-def boxes(monkeypatch):
-    """Records QMessageBox calls instead of showing them; ``answer`` is returned from question()."""
-    from PySide6.QtWidgets import QMessageBox
-
-    calls = {"critical": [], "warning": [], "question": [], "answer": QMessageBox.Discard}
-
-    def record(kind):
-        def f(_parent, title, text, *args, **kwargs):
-            calls[kind].append((title, text))
-            return calls["answer"] if kind == "question" else QMessageBox.Ok
-        return f
-
-    for kind in ("critical", "warning", "question"):
-        monkeypatch.setattr(QMessageBox, kind, staticmethod(record(kind)))
-    return calls
-
-
 def _ticks(qtbot, window, until, timeout_ms=5000):
     """Let the real frame timer run until ``until()`` holds."""
     qtbot.waitUntil(until, timeout=timeout_ms)
