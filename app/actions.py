@@ -80,6 +80,8 @@ ACTIONS: tuple[ActionSpec, ...] = (
     ActionSpec("trackball", "Trackball orbit", lambda w, on: w.set_orbit("trackball" if on else "turntable"), None,
                "Orbit freely (the horizon may roll); off: turntable, z stays up", checkable=True),
     ActionSpec("shortcuts", "&Shortcuts", lambda w: w.show_shortcuts(), "F1", "List the keyboard and mouse controls"),
+    ActionSpec("sticks", "Stick figure", lambda w, on: w.set_body("sticks" if on else "mannequin"), None,
+               "Draw the body as sticks instead of the mannequin", checkable=True),
 )
 
 #: Menus: (title, entries); an entry names an action or a submenu, None is a separator.
@@ -88,7 +90,7 @@ MENUS = (
                None, "screenshot", None, "quit")),
     ("&Edit", ("undo", "redo")),
     ("&Pose", ("root_left", "root_right", None, "reset", "random", "mirror_lr", "mirror_rl", "walk", "scenarios")),
-    ("&View", ("frame", "frame_selected", None, *(f"view_{n}" for n, _ in VIEW_KEYS), None, "trackball")),
+    ("&View", ("frame", "frame_selected", None, *(f"view_{n}" for n, _ in VIEW_KEYS), None, "trackball", "sticks")),
     ("&Solver", ("pause",)),
     ("&Help", ("shortcuts",)),
 )

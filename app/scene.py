@@ -54,6 +54,25 @@ def glyph_actor(points: pv.PolyData, radius: float, colors: np.ndarray | None, c
     return actor
 
 
+def sphere_widget(plotter, radius: float, color, selected_color, resolution: tuple[int, int] = (20, 14),
+                  opacity: float = 1.0) -> vtk.vtkSphereWidget:
+    """A draggable sphere widget (surface, no scaling, picked before the camera moves), off until ``On()``."""
+    w = vtk.vtkSphereWidget()
+    w.SetInteractor(plotter.iren.interactor)
+    w.SetCurrentRenderer(plotter.renderer)
+    w.SetRepresentationToSurface()
+    w.SetRadius(radius)
+    w.SetThetaResolution(resolution[0])
+    w.SetPhiResolution(resolution[1])
+    w.ScaleOff()
+    w.SetPriority(1.0)
+    w.GetSphereProperty().SetColor(color)
+    w.GetSphereProperty().SetSpecular(0.4)
+    w.GetSphereProperty().SetOpacity(opacity)
+    w.GetSelectedSphereProperty().SetColor(selected_color)
+    return w
+
+
 def set_colors(pd: pv.PolyData, colors: np.ndarray) -> None:
     """Overwrite a PolyData's per-point "colors" array in place."""
     arr = pd.GetPointData().GetArray("colors")

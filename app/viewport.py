@@ -31,7 +31,7 @@ import vtk
 from gsik.rotations import quaternion_from_matrix, transform
 from gsik_studio import camera
 from gsik_studio.model import Document, Signal
-from gsik_studio.scene import glyph_actor, line_cells, points_view, rgb8, set_colors, touch
+from gsik_studio.scene import glyph_actor, line_cells, points_view, rgb8, set_colors, sphere_widget, touch
 
 # Colours (RGB 0-1). Red / green / blue are reserved for targets, effectors and axes.
 AXIS_COLORS = np.array([[0.93, 0.18, 0.16], [0.20, 0.80, 0.22], [0.20, 0.45, 1.00]])
@@ -59,7 +59,7 @@ EFFECTOR_RADIUS = 0.026  # [m]
 BOX_SIZE = 0.16  # [m]
 PICK_TOLERANCE_PX = 8  # a press this many pixels off a target's sphere still grabs it
 
-def _ring_and_stick(axis: np.ndarray) -> np.ndarray:
+def ring_and_stick(axis: np.ndarray) -> np.ndarray:
     """(RING_POINTS + 2, 3) points of a ring around ``axis`` and a stick along it, in the DOF's frame."""
     a = axis / np.linalg.norm(axis)
     u = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
@@ -80,6 +80,7 @@ class Viewport:
     Attributes:
         selection_changed: Signal(name or None) when a target is selected.
         drag_finished: Signal(name) when a target gizmo drag ends.
+        layers: More drawings (the body, balance): each one's ``refresh(P, R)`` runs in :meth:`refresh`.
     """
 
     def __init__(self, plotter: pv.Plotter, doc: Document):
@@ -96,6 +97,7 @@ class Viewport:
         self._sites = tuple(sk.effector_sites)
         self._site_frames = np.array([sk.frame_of(n) for n in self._sites])
         self._limit_state: np.ndarray | None = None
+        self.layers: list = []
         self._build()
         self.refresh()
         self.sync_targets()
@@ -141,7 +143,7 @@ class Viewport:
 
         # DOF gizmos: a ring + stick per DOF in its own frame, axis-coloured.
         self._dof_frames = np.asarray(sk.dof_frame)
-        local = np.stack([_ring_and_stick(np.asarray(sk.frame_axis[f])) for f in self._dof_frames])
+        local = np.stack([ring_and_stick(np.asarray(sk.frame_axis[f])) for f in self._dof_frames])
         self._gizmo_local = local  # (n_dofs, K, 3)
         K = local.shape[1]
         cells = []
@@ -185,19 +187,7 @@ class Viewport:
         # Target gizmos: one sphere widget per effector site.
         self.target_widgets = []
         for i, name in enumerate(self._sites):
-            w = vtk.vtkSphereWidget()
-            w.SetInteractor(pl.iren.interactor)
-            w.SetCurrentRenderer(pl.renderer)
-            w.SetRepresentationToSurface()
-            w.SetRadius(TARGET_RADIUS)
-            w.SetThetaResolution(20)
-            w.SetPhiResolution(14)
-            w.ScaleOff()
-            w.SetPriority(1.0)
-            w.GetSphereProperty().SetColor(TARGET_COLOR)
-            w.GetSphereProperty().SetSpecular(0.4)
-            w.GetSphereProperty().SetOpacity(TARGET_OPACITY)
-            w.GetSelectedSphereProperty().SetColor(TARGET_SELECTED_COLOR)
+            w = sphere_widget(pl, TARGET_RADIUS, TARGET_COLOR, TARGET_SELECTED_COLOR, opacity=TARGET_OPACITY)
             w.AddObserver("StartInteractionEvent", self._make_callback(self._on_drag_start, name))
             w.AddObserver("InteractionEvent", self._make_callback(self._on_drag_move, name))
             w.AddObserver("EndInteractionEvent", self._make_callback(self._on_drag_end, name))
@@ -356,6 +346,8 @@ class Viewport:
         M[:3, :3] = R[f]
         M[:3, 3] = P[f]
         self.actors["root"].user_matrix = M
+        for layer in self.layers:
+            layer.refresh(P, R)
 
     def sync_targets(self) -> None:
         """Move the target widgets to the document's targets (no callbacks fire)."""

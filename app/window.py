@@ -25,9 +25,12 @@ from gsik_studio import animations
 from gsik_studio.actions import VIEW_KEYS, make_actions, make_menus, make_toolbar
 from gsik_studio.files import FileActions
 from gsik_studio.model import Document, FrameLoop, Playback
+from gsik_studio.model.joints import JointEditor
 from gsik_studio.qt_compat import protect_none
 from gsik_studio.widgets import nice
+from gsik_studio.widgets.balance_panel import balance_panel
 from gsik_studio.widgets.effectors import EffectorsPanel
+from gsik_studio.widgets.joint_panel import JointPanel
 from gsik_studio.widgets.library import LibraryPanel
 from gsik_studio.widgets.selected import SelectedTargetPanel
 from gsik_studio.widgets.solver_panel import solver_panel
@@ -55,6 +58,10 @@ class MainWindow(QtWidgets.QMainWindow):
         import pyvista as pv
 
         from gsik_studio.view_widget import ViewWidget
+        from gsik_studio.balance_view import BalanceView
+        from gsik_studio.body_view import BodyView
+        from gsik_studio.joint_rings import JointRings
+        from gsik_studio.pole_gizmos import PoleGizmos
         from gsik_studio.viewport import Viewport
 
         pv.global_theme.multi_samples = 0  # software GL: multisampling costs 3-5x
@@ -69,6 +76,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setCentralWidget(self.plotter)
         self.viewport = Viewport(self.plotter, self.doc)
         self.plotter.snap_press = self.viewport.snap_offset  # a click a few pixels off a target grabs it
+        self.body = BodyView(self.viewport)
+        self.balance_view = BalanceView(self.doc, self.body.overlay)
+        self.viewport.layers.append(self.balance_view)
+        self.poles = PoleGizmos(self.viewport)
+        self.joints = JointEditor(self.doc)
+        self.rings = JointRings(self.viewport, self.joints)
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
                                  self._show_opened, self.open_document)
         self._make_actions()
@@ -110,11 +123,16 @@ class MainWindow(QtWidgets.QMainWindow):
         layout.setSpacing(10)
         self.effectors = EffectorsPanel(self.doc, self.viewport.select)
         self.selected = SelectedTargetPanel(self.doc, lambda: self.viewport.selected)
+        self.joint_panel = JointPanel(self.joints)
         self.solver_panel = solver_panel(self.doc, self.settings)
         self.solver_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
         self.solver_panel.restore()
+        self.balance_panel = balance_panel(self.doc, self.settings, self.show_support)
+        self.balance_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
+        self.balance_panel.restore()
         self.library_panel = LibraryPanel(self.doc, lambda text: self.statusBar().showMessage(text, 6000))
-        for box in (self.effectors, self.selected, self.library_panel, self.solver_panel):
+        for box in (self.effectors, self.selected, self.joint_panel, self.balance_panel, self.library_panel,
+                    self.solver_panel):
             layout.addWidget(box)
         layout.addStretch(1)
         scroll = QtWidgets.QScrollArea()
@@ -148,6 +166,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.loop.events.wake.connect(self._start_timer)
         self.loop.events.frame.connect(self._show_frame)
         self.loop.events.readouts.connect(self.effectors.show_errors)
+        self.loop.events.readouts.connect(self.joint_panel.show_angles)
+        ev.pose.connect(self.joint_panel.show_angles)
+        self.joints.selection_changed.connect(lambda _name: self.viewport.render())
+        self.doc.controls.changed.connect(self.loop.wake)
         self.loop.events.message.connect(lambda text: self.statusBar().showMessage(text, 8000))
         self.viewport.selection_changed.connect(self._show_selection)
         self.viewport.drag_finished.connect(lambda _name: self._show_history())
@@ -283,6 +305,18 @@ class MainWindow(QtWidgets.QMainWindow):
             self.timer.stop()
             self.doc.timeline.pause()  # Pause stops everything that moves
         self.loop.set_paused(paused)
+
+    def set_body(self, mode: str) -> None:
+        """Draw the body as ``"mannequin"`` or ``"sticks"``."""
+        self.body.set_mode(mode)
+        with QtCore.QSignalBlocker(self.act_sticks):
+            self.act_sticks.setChecked(mode == "sticks")
+        self.viewport.render()
+
+    def show_support(self, on: bool) -> None:
+        """Show or hide the centre of mass and the support polygon."""
+        self.balance_view.set_visible(on)
+        self.viewport.render()
 
     def set_view(self, name: str) -> None:
         self.viewport.set_view(name)

@@ -2,8 +2,8 @@
 
     xvfb-run -a -s "-screen 0 1600x1100x24" python benchmarks/bench_app.py [--frames 300]
 
-1. The real :class:`gsik_studio.window.MainWindow` (1280x800) for ``--frames``
-   frames while the targets move: both hands circle, the head sways. Each
+1. The real :class:`gsik_studio.window.MainWindow` (1280x800, the mannequin and
+   the centre of mass drawn) for ``--frames`` frames while the targets move: both hands circle, the head sways. Each
    frame is what the app does when the artist drags: a target move goes
    through the document's command (one merged undo step), the window's
    frame loop (:class:`gsik_studio.model.FrameLoop`, driven here instead of
@@ -13,6 +13,8 @@
    same objects (the same kinds and counts of actors, sphere widgets and the
    box widget), whose points are moved in place each frame and rendered the
    same way: the floor this machine's rendering puts under any app.
+3. The same window drawing the stick figure without the centre of mass:
+   what the mannequin and the balance drawing cost, in the same run.
 
 3. Both again under real mouse drags: Qt mouse events (``QTest``: press on a
    target sphere, then moves along a circle, release) go into each 3D view,
@@ -22,7 +24,7 @@
    one per mouse event) per second of wall time; renders per mouse event
    are counted on the render window.
 
-Printed: frames per second of both, the app's own time per frame excluding
+Printed: frames per second of all, the app's own time per frame excluding
 VTK rendering and Qt painting (document command, solver step, scene update,
 read-outs), and the solver's share of it; the last line is the real-mouse
 ratio. Timings vary with machine load; nothing here is asserted by the tests.
@@ -79,9 +81,12 @@ def _pump(app, plotter, counter: RenderCounter) -> None:
 
 
 class AppRun:
-    """The real window; each frame moves three targets through a document command, runs one frame of the loop, paints."""
+    """The real window; each frame moves three targets through a document command, runs one frame of the loop, paints.
 
-    def __init__(self, size: tuple[int, int]):
+    ``body``: "mannequin" (the default view) or "sticks"; ``com``: draw the centre of mass and support polygon.
+    """
+
+    def __init__(self, size: tuple[int, int], body: str = "mannequin", com: bool = True):
         import tempfile
 
         from PySide6 import QtCore
@@ -94,6 +99,8 @@ class AppRun:
         self.w = w = MainWindow(settings=settings, run_timers=False)  # this benchmark drives w.loop itself
         w.resize(*size)
         w.show()
+        w.set_body(body)
+        w.show_support(com)
         for _ in range(20):
             self.app.processEvents()
         self.counter = RenderCounter(w.plotter)
@@ -305,7 +312,8 @@ def main() -> None:
     viewport = (app_run.w.plotter.width(), app_run.w.plotter.height())
     bare = BareRun(size, app_run)
     bare_vp = BareRun(viewport, app_run)
-    runs = (app_run, bare, bare_vp)
+    sticks = AppRun(size, body="sticks", com=False)
+    runs = (app_run, bare, bare_vp, sticks)
     for run in runs:  # warm up
         for _ in range(10):
             run.frame(record=False)
@@ -317,9 +325,9 @@ def main() -> None:
             for _ in range(n):
                 run.frame()
         done += n
-    fps_app, fps_bare, fps_vp = (_fps(r.frame_times) for r in runs)
+    fps_app, fps_bare, fps_vp, fps_sticks = (_fps(r.frame_times) for r in runs)
     drags = _mouse_drags(app_run, bare_vp, args)
-    info, bare_info, vp_info = (r.close() for r in runs)
+    info, bare_info, vp_info, _ = (r.close() for r in runs)
     app_ms = 1e3 * statistics.median(app_run.app_times)
     p95 = 1e3 * float(np.percentile(app_run.app_times, 95))
     solve = 1e3 * statistics.median(app_run.solve_times)
@@ -334,6 +342,8 @@ def main() -> None:
     print(f"  bare PyVista scene:    {fps_bare:6.1f} fps  (same objects {info['objects']}, same window size, "
           f"the 3D view filling it)")
     print(f"  app / bare:            {100 * fps_app / fps_bare:6.1f} %")
+    print(f"  app, stick view, no centre of mass: {fps_sticks:.1f} fps (mannequin / sticks: "
+          f"{100 * fps_app / fps_sticks:.1f} %; own time {1e3 * statistics.median(sticks.app_times):.3f} ms median)")
     print(f"  bare scene, window the size of the app's 3D view {vp_info['viewport'][0]}x{vp_info['viewport'][1]}: "
           f"{fps_vp:.1f} fps (app / that: {100 * fps_app / fps_vp:.1f} %)")
     app_drag, bare_drag = drags

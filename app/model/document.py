@@ -32,6 +32,7 @@ from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
 from gsik_studio.model.library import PoseLibrary
 from gsik_studio.model.mirror import mirror_map
+from gsik_studio.model.pins import SolveControls, default_levels
 from gsik_studio.model.poses import RootPlacement, check_pose, driven_target, standing_pose, target_at
 from gsik_studio.model.timeline import Timeline
 
@@ -75,7 +76,8 @@ class Document:
         self._targets: dict[str, Target] = {}
         self._playback: Playback | None = None
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
-        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
+        self.controls = SolveControls(self.solver, self._push_targets)
+        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT, default_levels(self.skeleton)))
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
         self.timeline = Timeline(self)  # the motion kept with the pose
         self.library = PoseLibrary(self)  # named poses, undone with the pose
@@ -159,8 +161,8 @@ class Document:
         self.last_result = None
 
     def _push_targets(self) -> None:
-        """Hand the targets to the solver (it skips the disabled ones)."""
-        self.solver.set_targets(self._targets)
+        """Hand the targets and the pole targets to the solver (it skips the disabled ones)."""
+        self.solver.set_targets({**self._targets, **self.controls.poles})
         self.needs_solving = True
 
     def _snapped_targets(self) -> dict[str, Target]:
@@ -221,8 +223,8 @@ class Document:
         if not isinstance(target, Target):
             raise gsik.TargetError(f"target for {name!r} must be a gsik.Target, got {type(target).__name__}")
         old = self._targets[name]
-        same_flags = (old.enabled, old.weight, old.position_only) == (target.enabled, target.weight,
-                                                                      target.position_only)
+        same_flags = (old.enabled, old.weight, old.position_only, old.priority) == (
+            target.enabled, target.weight, target.position_only, target.priority)
 
         def apply():
             self._targets[name] = target
@@ -270,11 +272,11 @@ class Document:
                         f"Rotate {name} about {axis}")
 
     def set_target_options(self, name: str, *, enabled: bool | None = None, weight: float | None = None,
-                           position_only: bool | None = None) -> None:
-        """Enable or disable an effector, change its weight or its position-only flag."""
+                           position_only: bool | None = None, priority: int | None = None) -> None:
+        """Enable or disable an effector, change its weight, position-only flag or priority level (its pin)."""
         t = self._effector(name)
-        changes = {k: v for k, v in dict(enabled=enabled, weight=weight, position_only=position_only).items()
-                   if v is not None}
+        changes = {k: v for k, v in dict(enabled=enabled, weight=weight, position_only=position_only,
+                                         priority=priority).items() if v is not None}
         new = t.replace(**changes)
         if new == t:
             return
@@ -313,11 +315,11 @@ class Document:
         check_pose(self.skeleton, pose)
         self._edit(text, lambda: self._restore(pose))
 
-    def set_angles(self, q, text: str = "Set angles", snap_targets: bool = True) -> None:
+    def set_angles(self, q, text: str = "Set angles", snap_targets: bool = True, drag: object | None = None) -> None:
         """New joint angles (n_dofs,) [rad] (clamped into the limits), the root staying pinned.
 
         With ``snap_targets`` the targets move onto the new effector poses,
-        so the pose holds.
+        so the pose holds. Calls with one ``drag`` token merge into one undo step.
         """
         q = np.clip(self.skeleton.validate_q(q), self.skeleton.lower, self.skeleton.upper)
 
@@ -327,7 +329,7 @@ class Document:
                 self._targets = self._snapped_targets()
             self._push_targets()
 
-        self._edit(text, apply)
+        self._edit(text, apply, None if drag is None else ("angles", text, drag))
 
     def reset(self) -> None:
         """Back to the standing pose on the default root; effector flags are kept."""
@@ -438,7 +440,7 @@ class Document:
         """The standing pose, no file, empty history."""
         self._interrupt_playback()
         file_state = self._file_state()
-        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT))
+        self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT, default_levels(self.skeleton)))
         self.library.restore(())
         self.timeline.clear()
         self.history.clear()

@@ -29,7 +29,7 @@ class DocumentEvents:
     Attributes:
         pose: Angles, root or all targets were replaced (an edit of the pose, undo, redo, load, a playback frame).
         targets: A target moved or turned (flags unchanged).
-        options: A target's enabled / weight / position-only flag changed.
+        options: A target's enabled / weight / position-only flag or priority level (its pin) changed.
         settings: The solver settings changed.
         file: The file path or the unsaved-changes flag changed.
         history: The undo stack changed (a new step, undo, redo, cleared).

@@ -42,7 +42,7 @@ def target_at(world_from_effector: np.ndarray, like: Target | None = None) -> Ta
     """A target at a world transform (4, 4), with the flags of ``like`` (defaults when None)."""
     if like is None:
         return Target.from_transform(world_from_effector)
-    return Target.from_transform(world_from_effector, like.weight, like.position_only, like.enabled)
+    return Target.from_transform(world_from_effector, like.weight, like.position_only, like.enabled, like.priority)
 
 
 def driven_target(t: Target, old: Target) -> Target:
@@ -52,18 +52,20 @@ def driven_target(t: Target, old: Target) -> Target:
     return t
 
 
-def standing_pose(skeleton: gsik.Skeleton, flags: Mapping[str, Target], position_only: Iterable[str]) -> Pose:
+def standing_pose(skeleton: gsik.Skeleton, flags: Mapping[str, Target], position_only: Iterable[str],
+                  levels: Mapping[str, int] | None = None) -> Pose:
     """The skeleton's rest pose on its default root, targets on the effectors.
 
-    Targets keep the enabled / weight / position-only flags of ``flags`` where it
-    has the effector; new ones are position-only for the names in ``position_only``.
+    Targets keep the enabled / weight / position-only / priority flags of ``flags``
+    where it has the effector; new ones are position-only for the names in
+    ``position_only`` and get priority ``levels[name]`` (0 when not given).
     """
     solver = gsik.Solver(skeleton)
     targets = {}
     for name, T in solver.effector_poses().items():
         old = flags.get(name)
         targets[name] = target_at(T, old) if old is not None else Target.from_transform(
-            T, position_only=name in position_only)
+            T, position_only=name in position_only, priority=(levels or {}).get(name, 0))
     placement = RootPlacement.from_transform(solver.world_from_root)
     return Pose(skeleton.name, skeleton.root, *placement, dict(zip(skeleton.dof_names, skeleton.rest.tolist())),
                 targets)

@@ -1,4 +1,4 @@
-"""The effectors panel: per effector a select button, enabled / weight / position-only, and its errors."""
+"""The effectors panel: per effector a select button, enabled / pin / weight / position-only, and its errors."""
 
 from __future__ import annotations
 
@@ -9,9 +9,11 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from PySide6.QtCore import Qt
 
 from gsik_studio.model import Document
+from gsik_studio.model.pins import is_pinned, pin_level
 from gsik_studio.widgets import nice
 
-COLUMNS = (("", ""), ("on", "Enabled"), ("weight", "Weight"), ("pos only", "Position only"),
+COLUMNS = (("", ""), ("on", "Enabled"), ("pin", "Pinned: a higher priority level than unpinned targets"),
+           ("weight", "Weight"), ("pos only", "Position only"),
            ("pos err", "Position error [mm]"), ("rot err", "Orientation error [deg]"))
 
 
@@ -27,6 +29,8 @@ class EffectorRow:
                                   "QPushButton:checked { background: #3d6db3; color: white; font-weight: bold; }")
         self.enabled = QtWidgets.QCheckBox()
         self.enabled.setToolTip("Enabled: the solver pulls this effector to its target")
+        self.pin = QtWidgets.QCheckBox()
+        self.pin.setToolTip("Pinned: met first; pulling an unpinned target never moves a pinned one")
         self.weight = QtWidgets.QDoubleSpinBox()
         self.weight.setRange(0.0, 100.0)
         self.weight.setDecimals(2)
@@ -44,22 +48,24 @@ class EffectorRow:
             label.setFont(QtGui.QFontDatabase.systemFont(QtGui.QFontDatabase.FixedFont))
 
     def widgets(self):
-        return (self.button, self.enabled, self.weight, self.position_only, self.position_error,
+        return (self.button, self.enabled, self.pin, self.weight, self.position_only, self.position_error,
                 self.orientation_error)
 
     def show_target(self, target, is_root: bool) -> None:
         """Show a target's flags (``None``: no target, the effector is the root), signals blocked."""
-        blockers = [QtCore.QSignalBlocker(w) for w in (self.enabled, self.weight, self.position_only)]
+        blockers = [QtCore.QSignalBlocker(w) for w in (self.enabled, self.pin, self.weight, self.position_only)]
         on = target is not None and target.enabled
         self.enabled.setEnabled(target is not None)
         self.weight.setEnabled(on)
         self.position_only.setEnabled(on)
+        self.pin.setEnabled(on)
         self.button.setEnabled(target is not None)
         self.button.setText(f"{nice(self.name)}  (root)" if is_root else nice(self.name))
         if target is not None:
             self.enabled.setChecked(target.enabled)
             self.weight.setValue(target.weight)
             self.position_only.setChecked(target.position_only)
+            self.pin.setChecked(is_pinned(target))
         del blockers
 
     def show_errors(self, target, errors: tuple[float, float] | None) -> None:
@@ -93,9 +99,10 @@ class EffectorsPanel(QtWidgets.QGroupBox):
             row = self.rows[name] = EffectorRow(name)
             self.select_group.addButton(row.button)
             for col, w in enumerate(row.widgets()):
-                grid.addWidget(w, r, col, Qt.AlignCenter if col in (1, 3) else Qt.Alignment())
+                grid.addWidget(w, r, col, Qt.AlignCenter if col in (1, 2, 4) else Qt.Alignment())
             row.button.clicked.connect(lambda _c=False, n=name: select(n))
             row.enabled.toggled.connect(lambda v, n=name: self._set_option(n, enabled=v))
+            row.pin.toggled.connect(lambda v, n=name: self._set_option(n, priority=pin_level(v)))
             row.weight.valueChanged.connect(lambda v, n=name: self._set_option(n, weight=v))
             row.position_only.toggled.connect(lambda v, n=name: self._set_option(n, position_only=v))
         units = QtWidgets.QLabel("<small>errors: position [mm], orientation [deg]</small>")

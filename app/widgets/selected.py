@@ -8,7 +8,7 @@ from collections.abc import Callable
 from PySide6 import QtWidgets
 
 from gsik_studio.model import Document
-from gsik_studio.widgets import nice
+from gsik_studio.widgets import hint, nice
 
 ROTATE_STEP_DEG = 15.0
 AXIS_COLORS = {"x": "#e0463c", "y": "#3cb043", "z": "#4a7cff"}
@@ -39,11 +39,8 @@ class SelectedTargetPanel(QtWidgets.QGroupBox):
         self.snap_button = QtWidgets.QPushButton("Snap target to effector")
         self.snap_button.clicked.connect(self.snap)
         v.addWidget(self.snap_button)
-        hint = QtWidgets.QLabel("<small>Drag a red sphere to move a target; drag a face of the box around "
-                                "the selected target to turn it.</small>")
-        hint.setWordWrap(True)
-        hint.setStyleSheet("color: gray")
-        v.addWidget(hint)
+        v.addWidget(hint("Drag a red sphere to move a target; drag a face of the box around "
+                         "the selected target to turn it."))
 
     def _target(self) -> str | None:
         name = self._selected()

@@ -152,3 +152,21 @@ def window(qtbot, studio_settings):
     yield w
     w.doc.history.set_clean()  # no "unsaved changes" question on teardown
     w.close()
+
+
+@pytest.fixture()
+def boxes(monkeypatch):
+    """Records QMessageBox calls instead of showing them; ``answer`` is returned from question()."""
+    from PySide6.QtWidgets import QMessageBox
+
+    calls = {"critical": [], "warning": [], "question": [], "answer": QMessageBox.Discard}
+
+    def record(kind):
+        def f(_parent, title, text, *args, **kwargs):
+            calls[kind].append((title, text))
+            return calls["answer"] if kind == "question" else QMessageBox.Ok
+        return f
+
+    for kind in ("critical", "warning", "question"):
+        monkeypatch.setattr(QMessageBox, kind, staticmethod(record(kind)))
+    return calls

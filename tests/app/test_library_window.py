@@ -6,7 +6,6 @@ import pytest
 
 pytestmark = pytest.mark.gui
 
-from test_window import boxes  # noqa: E402,F401 (the window fixture is in conftest.py)
 
 
 def _click(qtbot, button):

@@ -12,7 +12,6 @@ from gsik.io.bvh import read_bvh
 
 pytestmark = pytest.mark.gui
 
-from test_window import boxes  # noqa: E402,F401 (the window fixture is in conftest.py)
 
 DATA = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
 

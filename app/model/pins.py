@@ -1,0 +1,157 @@
+"""The artist's control over the solve: pins (strict priority levels), posture strength, balance, centre of mass.
+
+Plain Python. A pin is a target's priority (:attr:`gsik.Target.priority`):
+a pinned target is on level :data:`PINNED` (0), an unpinned one on
+:data:`FREE` (1), so pulling an unpinned hand never moves a pinned foot or
+pelvis (the solver meets level 1 only in what level 0 leaves free). The pin
+travels with the target: undo, redo and pose files keep it.
+
+Posture strength and balance are solver state, not pose: the document owns one
+:class:`SolveControls` (``doc.controls``), the only other place that tells
+the solver anything.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+import gsik
+from gsik import balance, control
+from gsik.targets import Target
+from gsik_studio.model.events import Signal
+
+PINNED = 0  #: priority level of a pinned target
+FREE = 1  #: priority level of an unpinned target
+POLE = 2  #: priority level of a pole target: it only bends a limb in what the targets leave free
+#: Joints that get a pole target (where the skeleton has them): the knees and elbows.
+POLE_JOINTS = ("left_knee", "right_knee", "left_elbow", "right_elbow")
+#: Effectors pinned in a new document: pulling a hand never moves them unless unpinned.
+PINNED_BY_DEFAULT = ("left_foot", "right_foot", "pelvis")
+
+
+def is_pinned(t: Target) -> bool:
+    return t.priority == PINNED
+
+
+def pin_level(pinned: bool) -> int:
+    """The priority level of a pinned (True) or unpinned target."""
+    return PINNED if pinned else FREE
+
+
+def default_levels(skeleton: gsik.Skeleton) -> dict[str, int]:
+    """``{effector site: level}`` of a new document: :data:`PINNED_BY_DEFAULT` pinned, the others free."""
+    return {n: pin_level(n in PINNED_BY_DEFAULT) for n in skeleton.effector_sites}
+
+
+class Support(NamedTuple):
+    """Where the body stands, for drawing.
+
+    Attributes:
+        com: Centre of mass (3,) in the world [m].
+        polygon: Support polygon on the ground (k, 2) [m], counter-clockwise: the convex hull of the soles on it.
+        ground: Height of the ground [m] (the root foot's sole).
+        inside: True when the centre of mass's ground projection lies inside the polygon.
+    """
+
+    com: np.ndarray
+    polygon: np.ndarray
+    ground: float
+    inside: bool
+
+
+class SolveControls:
+    """Posture strength and balance of a document's solver, and the centre of mass and support read-outs.
+
+    Pole targets are position-only targets on knees and elbows at level
+    :data:`POLE`: dragging one swings the limb's bend towards it without moving
+    any hand or foot. They are solver state like the posture (not saved, not undone).
+
+    Args:
+        solver: The document's solver.
+        push: Hands the document's targets and these poles to the solver (the document's own method).
+
+    Attributes:
+        poles: ``{joint: Target}`` while pole targets are on, else empty.
+        changed: Signal() after the posture strength, balance or a pole changed.
+    """
+
+    def __init__(self, solver: gsik.Solver, push: Callable[[], None]):
+        self._solver = solver
+        self._push = push
+        self.posture_strength = 0.0
+        self.poles: dict[str, Target] = {}
+        self.changed = Signal()
+
+    @property
+    def pole_joints(self) -> tuple[str, ...]:
+        """The joints of :data:`POLE_JOINTS` this skeleton has."""
+        return tuple(n for n in POLE_JOINTS if n in self._solver.skeleton.joint_names)
+
+    def joint_position(self, joint: str) -> np.ndarray:
+        """World position (3,) [m] of a joint now."""
+        sk = self._solver.skeleton
+        return self._solver.world_positions()[sk.joint_frame[sk.joint_names.index(joint)]]
+
+    def set_poles(self, on: bool) -> None:
+        """Turn pole targets on (each placed on its joint, so nothing moves yet) or off."""
+        self.poles = {n: Target(self.joint_position(n), position_only=True, priority=POLE)
+                      for n in self.pole_joints} if on else {}
+        self._push()
+        self.changed.emit()
+
+    def move_pole(self, joint: str, position) -> None:
+        """Move one pole target to a world position (3,) [m]."""
+        if joint not in self.poles:
+            raise gsik.TargetError(f"no pole target on {joint!r}; poles: {', '.join(self.poles) or 'none (off)'}")
+        self.poles[joint] = self.poles[joint].replace(position=position)
+        self._push()
+        self.changed.emit()
+
+    @property
+    def has_masses(self) -> bool:
+        """True when the skeleton gives segment masses (balance and the centre of mass need them)."""
+        return self._solver.skeleton.total_mass > 0.0
+
+    @property
+    def balance(self) -> bool:
+        return self._solver.balance
+
+    def set_posture_strength(self, strength: float) -> None:
+        """Prefer the rest pose with weight ``strength`` (>= 0, per DOF; 0 turns it off), below every target."""
+        s = float(strength)
+        if not np.isfinite(s) or s < 0.0:
+            raise gsik.SolverError(f"posture strength must be a number >= 0 (0: off), got {strength!r}")
+        self._solver.set_posture(None, s)
+        self.posture_strength = s
+        self.changed.emit()
+
+    def set_balance(self, on: bool) -> None:
+        """Hold the centre of mass over the support polygon (SolverError without segment masses)."""
+        self._solver.set_balance(bool(on))
+        self.changed.emit()
+
+    def center_of_mass(self) -> np.ndarray:
+        """The centre of mass (3,) in the world [m]."""
+        return self._solver.center_of_mass()
+
+    def support(self) -> Support:
+        """The centre of mass and the support polygon of the feet on the ground now."""
+        s = self._solver
+        sk = s.skeleton
+        P, R = s.world_positions(), s.world_rotations()
+        feet = control.support(sk, s.targets, P)
+        transforms = [_transform(R[f], P[f]) for f in feet.feet]
+        polygon = balance.support_polygon(transforms, feet.soles)
+        ground = float(P[sk.frame_of(sk.root)][2]) if sk.root in sk.soles else 0.0
+        com = s.center_of_mass()
+        inside = len(polygon) >= 3 and balance.signed_distance(polygon, com[:2]) <= 0.0
+        return Support(com, polygon, ground, bool(inside))
+
+
+def _transform(R: np.ndarray, p: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, p
+    return T

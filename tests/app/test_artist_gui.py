@@ -1,0 +1,262 @@
+"""The artist's tools in the real window under Xvfb: mannequin, joint rings, pins, balance, poles (real Qt events)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.gui
+
+
+def on_plane(*args):
+    from gsik_studio.joint_rings import on_plane
+
+    return on_plane(*args)
+
+
+@pytest.fixture()
+def window(window, qtbot):
+    """The studio's window (conftest.py), seen from the front."""
+    window.set_view("front")
+    qtbot.wait(50)
+    return window
+
+
+def _qpoint(window, xy):
+    from PySide6 import QtCore
+
+    plotter = window.plotter
+    r = plotter.devicePixelRatioF()
+    return QtCore.QPoint(int(round(xy[0] / r)), int(round(plotter.height() - xy[1] / r - 1)))
+
+
+def _press_drag_release(window, start_xy, end_xy, steps=10):
+    """A real left-button drag on the 3D view (Qt mouse events, as a person's)."""
+    from PySide6 import QtCore
+    from PySide6.QtTest import QTest
+
+    plotter = window.plotter
+    QTest.mouseMove(plotter, _qpoint(window, start_xy))
+    QTest.mousePress(plotter, QtCore.Qt.LeftButton, QtCore.Qt.NoModifier, _qpoint(window, start_xy))
+    for k in range(1, steps + 1):
+        QTest.mouseMove(plotter, _qpoint(window, start_xy + (end_xy - start_xy) * k / steps))
+    QTest.mouseRelease(plotter, QtCore.Qt.LeftButton, QtCore.Qt.NoModifier, _qpoint(window, end_xy))
+
+
+def _click(window, xy):
+    from PySide6 import QtCore
+    from PySide6.QtTest import QTest
+
+    QTest.mouseMove(window.plotter, _qpoint(window, xy))
+    QTest.mouseClick(window.plotter, QtCore.Qt.LeftButton, QtCore.Qt.NoModifier, _qpoint(window, xy))
+
+
+def _settle(qtbot, window):
+    qtbot.waitUntil(lambda: not window.doc.needs_solving, timeout=10000)
+
+
+def _ring_grip(window, dof):
+    """A display point on ``dof``'s ring where the ring runs most across the screen, and its screen tangent (px/rad)."""
+    rings = window.rings
+    axes, centres, pts = rings.ring_world()
+    px = rings.project(pts[dof])
+    best = None
+    for k in range(len(px)):
+        g = pts[dof][k] - centres[dof]
+        moved = centres[dof] + np.cos(0.05) * g + np.sin(0.05) * np.cross(axes[dof], g)
+        t = (rings.project(moved[None])[0] - px[k]) / 0.05
+        if best is None or np.linalg.norm(t) > np.linalg.norm(best[1]):
+            best = (px[k], t)
+    return best
+
+
+def test_the_mannequin_is_drawn_and_the_stick_view_is_an_option(window, qtbot):
+    body = window.body
+    assert body.mode == "mannequin" and body.mannequin.visible
+    assert not window.viewport.actors["bones"].GetVisibility()
+    # The solids sit on the bones: the mannequin's points surround the skeleton's frames.
+    pts = np.vstack([m.polydata.points for m in body.mannequin.meshes])
+    P = window.doc.world_positions()
+    assert np.all(pts.min(axis=0) < P.min(axis=0)) and np.all(pts.max(axis=0) > P.max(axis=0))
+    window.act_sticks.trigger()
+    assert body.mode == "sticks" and not body.mannequin.visible
+    assert window.viewport.actors["bones"].GetVisibility()
+    window.act_sticks.trigger()
+    assert body.mode == "mannequin"
+
+
+def test_the_mannequin_follows_the_pose_in_place(window, qtbot):
+    mesh = window.body.mannequin.meshes[0]
+    points_before = mesh.polydata.GetPoints()
+    xyz = mesh.polydata.points.copy()
+    window.doc.random_pose(seed=4)
+    _settle(qtbot, window)
+    window.viewport.refresh()
+    assert mesh.polydata.GetPoints() is points_before  # the same VTK points, overwritten
+    assert np.abs(mesh.polydata.points - xyz).max() > 0.05
+
+
+def test_clicking_a_joint_selects_it_and_the_panel_shows_its_angles(window, qtbot):
+    doc = window.doc
+    sk = doc.skeleton
+    knee = doc.world_positions()[sk.joint_frame[sk.joint_names.index("left_knee")]]
+    _click(window, window.rings.project(knee[None])[0])
+    assert window.joints.selected == "left_knee"
+    panel = window.joint_panel
+    assert "left knee" in panel.label.text()
+    assert panel.angles[0].isVisible() and not panel.angles[1].isVisible()
+    i = sk.dof_index("left_knee.x")
+    assert panel.angles[0].value() == pytest.approx(np.degrees(doc.q[i]), abs=0.06)
+
+
+def test_dragging_a_ring_turns_its_joint_within_limits_as_one_undo_step(window, qtbot):
+    doc = window.doc
+    sk = doc.skeleton
+    _settle(qtbot, window)
+    i = sk.dof_index("left_shoulder.y")
+    q0 = doc.q.copy()
+    n = len(doc.history.commands)
+    grip, tangent = _ring_grip(window, i)
+    end = grip + 40.0 * tangent / np.linalg.norm(tangent)
+    axes, centres, _ = window.rings.ring_world()
+    grabbed = on_plane(*window.rings._ray(grip), centres[i], axes[i])
+    _press_drag_release(window, grip, end)
+    assert window.joints.selected == "left_shoulder"
+    turned = doc.q[i] - q0[i]
+    assert turned > 0.3
+    # The grabbed point of the ring, turned with the joint, lies under the pointer's direction from the centre.
+    g = grabbed - centres[i]
+    a = axes[i]
+    moved = centres[i] + np.cos(turned) * g + np.sin(turned) * np.cross(a, g) + (1 - np.cos(turned)) * (a @ g) * a
+    c_px, m_px = window.rings.project(np.array([centres[i], moved]))
+    u, v = m_px - c_px, end - c_px
+    assert np.degrees(np.arccos(u @ v / np.linalg.norm(u) / np.linalg.norm(v))) < 3.0
+    assert sk.lower[i] <= doc.q[i] <= sk.upper[i]
+    assert len(doc.history.commands) == n + 1 and doc.history.undo_text == "Turn left_shoulder.y"
+    _settle(qtbot, window)
+    assert doc.q[i] - q0[i] == pytest.approx(turned, abs=1e-3)  # the targets followed: the turn holds
+    doc.undo()
+    np.testing.assert_array_equal(doc.q, q0)
+
+
+def test_typing_an_angle_turns_the_joint_and_stays_within_limits(window, qtbot):
+    doc = window.doc
+    window.joints.select("right_elbow")
+    spin = window.joint_panel.angles[0]
+    i = doc.skeleton.dof_index("right_elbow.x")
+    from PySide6 import QtCore
+    from PySide6.QtTest import QTest
+
+    spin.setFocus()
+    spin.lineEdit().selectAll()
+    QTest.keyClicks(spin.lineEdit(), "45")
+    QTest.keyClick(spin.lineEdit(), QtCore.Qt.Key_Return)
+    assert np.degrees(doc.q[i]) == pytest.approx(45.0, abs=1e-6)
+    assert doc.history.undo_text == "Turn right_elbow.x"
+    assert spin.minimum() == pytest.approx(np.degrees(doc.skeleton.lower[i]), abs=0.05)
+    assert spin.maximum() == pytest.approx(np.degrees(doc.skeleton.upper[i]), abs=0.05)
+    spin.lineEdit().selectAll()
+    QTest.keyClicks(spin.lineEdit(), "400")  # past the limit: the editor stops at it
+    QTest.keyClick(spin.lineEdit(), QtCore.Qt.Key_Return)
+    assert doc.q[i] <= doc.skeleton.upper[i]
+
+
+def test_a_press_on_a_target_still_moves_the_target_not_a_joint(window, qtbot):
+    doc = window.doc
+    _settle(qtbot, window)
+    start = doc.targets["left_hand"].position.copy()
+    xy = window.rings.project(start[None])[0]
+    _press_drag_release(window, xy, xy + np.array([30.0, 25.0]))
+    assert np.linalg.norm(doc.targets["left_hand"].position - start) > 0.02
+    assert window.joints.selected is None
+
+
+def _click_widget(widget):
+    from PySide6 import QtCore
+    from PySide6.QtTest import QTest
+
+    QTest.mouseClick(widget, QtCore.Qt.LeftButton, QtCore.Qt.NoModifier, widget.rect().center())
+
+
+def _drag_target_far(window, qtbot, name, delta_px=(320.0, 150.0)):
+    """Drag a target's sphere with the real mouse, then let the real frame timer run 1.5 s.
+
+    (Not until settled: out of reach with two unpinned targets on one level the prioritised solver
+    can keep reporting a budget exhausted, see the report.)"""
+    xy = window.rings.project(window.doc.targets[name].position[None])[0]
+    _press_drag_release(window, xy, xy + np.array(delta_px), steps=12)
+    qtbot.wait(1500)
+
+
+def test_pinned_pelvis_stays_when_a_hand_is_dragged_out_of_reach_until_unpinned(window, qtbot):
+    doc = window.doc
+    row = window.rows["pelvis"]
+    assert row.pin.isChecked() and not window.rows["left_hand"].pin.isChecked()
+    _settle(qtbot, window)
+    pelvis = doc.effector_poses()["pelvis"][:3, 3].copy()
+    _drag_target_far(window, qtbot, "left_hand")
+    hand_error = np.linalg.norm(doc.effector_poses()["left_hand"][:3, 3] - doc.targets["left_hand"].position)
+    assert hand_error > 0.1  # out of reach
+    assert np.linalg.norm(doc.effector_poses()["pelvis"][:3, 3] - pelvis) < 1e-4
+    _click_widget(row.pin)  # unpin: now the pelvis gives way to the hand
+    assert not doc.targets["pelvis"].priority == 0 and not row.pin.isChecked()
+    qtbot.wait(1500)
+    assert np.linalg.norm(doc.effector_poses()["pelvis"][:3, 3] - pelvis) > 0.01
+
+
+def test_balance_toggle_and_the_centre_of_mass_drawn_over_its_support(window, qtbot):
+    doc = window.doc
+    panel = window.balance_panel
+    view = window.balance_view
+    assert view.visible and view.com_actor.GetVisibility()
+    _click_widget(panel.balance)
+    assert doc.solver.balance and panel.balance.isChecked()
+    qtbot.wait(1000)
+    window.viewport.refresh()
+    s = doc.controls.support()
+    np.testing.assert_allclose(view._com.points[0], s.com, atol=1e-9)
+    marks = view._marks.points
+    assert marks[1][2] == pytest.approx(s.ground + 0.004) and marks[1][:2] == pytest.approx(s.com[:2])
+    np.testing.assert_allclose(view._polygon.points[: len(s.polygon), :2], s.polygon)
+    assert view.inside
+    _click_widget(panel.show_com)
+    assert not view.com_actor.GetVisibility()
+    spin = panel.editors["posture_strength"]
+    spin.setValue(0.5)
+    assert doc.controls.posture_strength == 0.5 and doc.solver.posture is not None
+
+
+def test_screenshot_shows_mannequin_pins_and_centre_of_mass(window, qtbot, tmp_path):
+    """A picture of the window with the body, a pulled hand and the balance drawn (looked at by hand too)."""
+    doc = window.doc
+    _click_widget(window.balance_panel.balance)
+    _drag_target_far(window, qtbot, "left_hand", (140.0, 60.0))
+    window.set_view("perspective")
+    img = window.grab_window()
+    assert img.width() > 600 and img.height() > 400
+    # The mannequin's clay colour and the centre of mass's yellow are both on the picture.
+    arr = np.frombuffer(img.constBits(), np.uint8).reshape(img.height(), img.bytesPerLine() // 4, 4)[..., :3]
+    rgb = arr[..., ::-1].reshape(-1, 3).astype(int)  # the image is BGRA in memory
+    assert np.any(np.all(np.abs(rgb - (255, 242, 89)) < 40, axis=1))  # COM_COLOR lit
+    assert doc.controls.support().inside
+    path = tmp_path / "artist.png"
+    assert img.save(str(path))
+
+
+def test_a_pole_gizmo_dragged_with_the_mouse_swings_the_knee(window, qtbot):
+    doc = window.doc
+    doc.move_target("pelvis", doc.targets["pelvis"].position + (0.0, 0.0, -0.08))  # crouch: the knees bend
+    _settle(qtbot, window)
+    _click_widget(window.balance_panel.poles)
+    assert set(doc.controls.poles) == {"left_knee", "right_knee", "left_elbow", "right_elbow"}
+    assert all(w.GetEnabled() for w in window.poles.widgets.values())
+    _settle(qtbot, window)
+    knee0 = doc.controls.joint_position("left_knee").copy()
+    pelvis = doc.effector_poses()["pelvis"][:3, 3].copy()
+    xy = window.rings.project(doc.controls.poles["left_knee"].position[None])[0]
+    _press_drag_release(window, xy, xy + np.array([80.0, 0.0]))  # front view: +x on screen is the body's left
+    assert window.joints.selected is None  # the pole widget took the press, not the rings
+    assert doc.controls.poles["left_knee"].position[0] < knee0[0] - 0.05
+    # The pole is the lowest level: the knee swings over a few dozen frames (slowly on a loaded machine).
+    qtbot.waitUntil(lambda: doc.controls.joint_position("left_knee")[0] < knee0[0] - 0.02, timeout=30000)
+    assert np.linalg.norm(doc.effector_poses()["pelvis"][:3, 3] - pelvis) < 1e-3
