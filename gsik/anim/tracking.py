@@ -1,29 +1,38 @@
-"""Clip tracking: solve a motion's own effector poses frame by frame, warm-started.
+"""Clip tracking: solve a motion's targets frame by frame, keeping the clip's body where no target says otherwise.
 
 The core loop of motion-capture cleanup and retargeting: for each frame of a
-clip take the effectors' world poses from the clip's forward kinematics, pin
-the IK root where the clip has it, and let the solver reach them starting
-from the previous frame's answer. How well and how fast it follows is the
-measure of the solver on real motion.
-"""
+clip take the targets' world poses from the clip's forward kinematics, pin
+the IK root where the clip has it, and let the solver reach them. By default
+(``follow_clip=True``) the clip's own pose of each frame (DOFs matched by
+name) is where that frame's steps start and the solver's preferred posture
+(the lowest priority, :meth:`gsik.Solver.set_posture`): every DOF the targets
+do not need follows the clip (fingers, knees, the spine), and the targets only
+move what they must. ``follow_clip=False`` is the plain solver measure: frame
+0 from the rest pose, every later frame warm-started from the previous
+frame's answer, no posture.
+
+Targets are any joints or sites of the skeleton; by default the skeleton's
+effector sites are on priority 0 and any other joint or site on priority 1
+(end sites over knees), which ``priorities`` changes per name."""
 
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
 from gsik import validate
-from gsik.errors import SkeletonError, SolverError, choices
+from gsik.errors import SolverError
 from gsik.kinematics import world_frames
 from gsik.anim.motion import Motion
-from gsik.rotations import transform
 from gsik.skeleton import Skeleton
 from gsik.solver import Solver, Status
-from gsik.targets import Target
+from gsik.anim.track_targets import (JOINT_PRIORITY, ClipTargets, TargetPlan, clip_frame, clip_posture,
+                                     clip_targets, effector_pairs, position_only_flags, priority_levels)
+
 
 
 class TrackSummary(NamedTuple):
@@ -56,14 +65,17 @@ class TrackResult:
 
     Attributes:
         motion: The solved motion on the tracking skeleton (root pinned per frame).
-        effector_names: (m,) the tracked effectors, in the error arrays' column order.
-        position_errors: (n_frames, m) distance of each effector to its target [m].
+        effector_names: (m,) the tracked targets (joints or sites), in the error arrays' column order.
+        position_errors: (n_frames, m) distance of each target's frame to its target [m].
         orientation_errors: (n_frames, m) angle to each target orientation [rad]
-            (0 with ``position_only``).
+            (0 for position-only targets).
         frame_seconds: (n_frames,) wall time of the solver's calls per frame [s]
             (frame 0 is a full solve; the others are warm-started steps).
         steps: (n_frames,) solver steps taken per frame (frame 0: linearisations).
         statuses: (n_frames,) the solver's status at the end of each frame.
+        body_names: (k,) every joint and site the skeleton shares with the clip.
+        body_errors: (n_frames, k) distance of each of them to the clip's [m].
+        body_height: The clip's height [m]: its extent along z in the median frame.
     """
 
     motion: Motion
@@ -73,6 +85,9 @@ class TrackResult:
     frame_seconds: np.ndarray
     steps: np.ndarray
     statuses: tuple[Status, ...]
+    body_names: tuple[str, ...]
+    body_errors: np.ndarray
+    body_height: float
 
     def summary(self, first_frame: int = 1) -> TrackSummary:
         """Mean, max and median figures from ``first_frame`` on (default 1: skip the initial full solve)."""
@@ -95,14 +110,33 @@ class TrackResult:
             max_frame_seconds=float(sec.max()),
         )
 
+    def body_table(self, percentile: float = 95.0) -> list[BodyError]:
+        """Each shared joint and site's error over all frames, worst (at ``percentile``) first."""
+        if self.body_errors.size == 0:
+            return []
+        p = np.percentile(self.body_errors, percentile, axis=0)
+        worst = np.argmax(self.body_errors, axis=0)
+        rows = [BodyError(n, float(p[k]), float(self.body_errors[worst[k], k]), int(worst[k]),
+                          n in self.effector_names) for k, n in enumerate(self.body_names)]
+        return sorted(rows, key=lambda r: -r.percentile_error)
 
-def _clip_frame(clip_skeleton: Skeleton, name: str, what: str) -> int:
-    try:
-        return clip_skeleton.frame_of(name)
-    except SkeletonError:
-        raise SolverError(f"the clip's skeleton {clip_skeleton.name!r} has no joint or site {name!r} for {what}; "
-                          f"joints: {choices(clip_skeleton.joint_names)}; sites: {choices(clip_skeleton.site_names)}"
-                          ) from None
+
+class BodyError(NamedTuple):
+    """One joint or site's distance to the clip over a track.
+
+    Attributes:
+        name: The joint or site.
+        percentile_error: Its error at the percentile asked for, over frames [m].
+        max_error: Its largest error [m] ...
+        worst_frame: ... in this frame.
+        tracked: True when it is one of the targets.
+    """
+
+    name: str
+    percentile_error: float
+    max_error: float
+    worst_frame: int
+    tracked: bool
 
 
 def track_clip(
@@ -113,25 +147,29 @@ def track_clip(
     *,
     sweeps: int = 20,
     steps_per_frame: int = 5,
-    position_only: bool = False,
+    position_only: bool | Collection[str] = False,
+    priorities: Mapping[str, int] | None = None,
+    follow_clip: bool = True,
+    posture_weight: float = 1.0,
     q0=None,
+    progress: Callable[[int, int], None] | None = None,
     **settings,
 ) -> TrackResult:
-    """Track ``motion`` with ``skeleton``: per frame, solve the clip's effector poses, warm-started.
+    """Track ``motion`` with ``skeleton``: per frame, solve the clip's target poses, warm-started.
 
     Frame 0 is solved in full (:meth:`Solver.solve`, from ``q0``); every later
-    frame re-pins the root, sets the new targets and takes up to
-    ``steps_per_frame`` warm-started :meth:`Solver.step` calls (fewer once
-    converged). Only those solver calls are timed; the errors are measured
+    frame re-pins the root, sets the new targets (with ``follow_clip``: starts
+    from the clip's pose and prefers it) and takes up to ``steps_per_frame``
+    :meth:`Solver.step` calls (fewer once converged). Only those solver calls are timed; the errors are measured
     afterwards by forward kinematics of the solved angles.
 
     Args:
         skeleton: The skeleton that tracks (the clip's own, or another one to
             retarget onto).
         motion: The clip.
-        effectors: Effector sites of ``skeleton`` to track, each following
+        effectors: Joints or sites of ``skeleton`` to track, each following
             the clip's joint or site of the same name; a mapping
-            ``{effector: clip name}`` to follow other names (retargeting).
+            ``{name: clip name}`` to follow other names (retargeting).
             Default: every effector site of ``skeleton`` (but the root) that
             the clip also has. The root, if listed, is left out: it is
             pinned where the clip has it.
@@ -139,32 +177,48 @@ def track_clip(
             frame where the clip has it. Default ``skeleton.root``.
         sweeps: Gauss-Seidel sweeps per step.
         steps_per_frame: Most steps per frame (>= 1).
-        position_only: Track positions only (for retargeting onto a skeleton
-            whose frames are oriented differently).
-        q0: Starting angles (n_dofs,) [rad] for frame 0; default the rest pose.
+        position_only: Track positions only: ``True`` for every target, or
+            the names of the targets to track by position only.
+        priorities: ``{name: level}`` (0 most important). Default: the
+            skeleton's effector sites 0, other joints and sites
+            :data:`JOINT_PRIORITY`.
+        follow_clip: Prefer the clip's pose of each frame (DOFs matched by
+            name; the rest pose for the others) and start frame 0 from it.
+        posture_weight: Weight of that preferred posture per DOF (> 0).
+        q0: Starting angles (n_dofs,) [rad] for frame 0; default the clip's
+            pose with ``follow_clip``, else the rest pose.
+        progress: Called as ``progress(frames done, n_frames)`` after each frame.
         **settings: Other :class:`~gsik.solver.SolverSettings` fields.
 
     Raises:
-        SolverError: an unknown effector or root (listing the valid names), a
+        SolverError: an unknown target or root (listing the valid names), a
             clip without frames, or a bad setting.
     """
     _check_inputs(skeleton, motion, steps_per_frame)
     root = skeleton.root if root is None else root
     skeleton.frame_of(root)
-    root_in_clip = _clip_frame(motion.skeleton, root, "the root")
-    pairs = _effector_pairs(skeleton, motion.skeleton, effectors, root)
+    root_in_clip = clip_frame(motion.skeleton, root, "the root")
+    pairs = effector_pairs(skeleton, motion.skeleton, effectors, root)
     names = tuple(pairs)
-    clip_frames = [_clip_frame(motion.skeleton, pairs[n], f"effector {n!r}") for n in names]
-    clip = _clip_targets(motion, root_in_clip, names, clip_frames, position_only)
+    clip_frames = [clip_frame(motion.skeleton, pairs[n], f"effector {n!r}") for n in names]
+    plan = TargetPlan(names, clip_frames, position_only_flags(names, position_only),
+                       priority_levels(skeleton, names, priorities))
+    clip = clip_targets(motion, root_in_clip, plan)
+    reference = clip_posture(skeleton, motion) if follow_clip else None
+    if q0 is None and reference is not None:
+        q0 = reference[0]
     solver = Solver(skeleton.with_root(root), q0=q0, world_from_root=clip.world_from_root[0], sweeps=sweeps,
                     **settings)
-    Q, seconds, steps, statuses = _follow(solver, clip, steps_per_frame)
-    eff_frames = np.array([skeleton.frame_of(n) for n in names], dtype=np.int64)
-    pos, ori = _errors(skeleton, root, Q, clip, eff_frames, position_only)
-    for a in (pos, ori, seconds, steps):
-        a.flags.writeable = False
+    Q, seconds, steps, statuses = _follow(solver, clip, steps_per_frame, reference, posture_weight, progress)
+    measured = _measure(skeleton, root, Q, clip, motion, plan)
     solved = Motion(skeleton, Q, (root,) * motion.n_frames, clip.world_from_root, motion.frame_time)
-    return TrackResult(solved, names, pos, ori, seconds, steps, tuple(statuses))
+    return TrackResult(solved, names, *measured[:2], _readonly(seconds), _readonly(steps), tuple(statuses),
+                       *measured[2:])
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
 
 
 def _check_inputs(skeleton: Skeleton, motion: Motion, steps_per_frame: int) -> None:
@@ -177,62 +231,9 @@ def _check_inputs(skeleton: Skeleton, motion: Motion, steps_per_frame: int) -> N
         raise SolverError("cannot track a clip with no frames")
 
 
-def _effector_pairs(skeleton: Skeleton, clip_sk: Skeleton, effectors, root: str) -> dict[str, str]:
-    """``{effector of skeleton: clip joint or site it follows}``, the root left out (it is pinned)."""
-    available = [n for n in skeleton.effector_sites if n != root]
-    pairs = _requested_pairs(clip_sk, effectors, available)
-    pairs.pop(root, None)  # pinned where the clip has it: tracked exactly
-    allowed = set(available)
-    for name in pairs:
-        if name not in allowed:
-            raise SolverError(f"{name!r} is not an effector of skeleton {skeleton.name!r}; "
-                              f"effectors: {choices(available)}")
-    return pairs
-
-
-def _requested_pairs(clip_sk: Skeleton, effectors, available: list[str]) -> dict[str, str]:
-    """The pairs as asked: a mapping, names (or one name) followed by the same name, or every shared effector."""
-    if isinstance(effectors, Mapping):
-        return dict(effectors)
-    if effectors is not None:
-        return {n: n for n in ([effectors] if isinstance(effectors, str) else effectors)}
-    in_clip = set(clip_sk.site_names) | set(clip_sk.joint_names)
-    pairs = {n: n for n in available if n in in_clip}
-    if not pairs:
-        raise SolverError(f"the clip has none of the skeleton's effectors {choices(available)}; "
-                          "name them with effectors={effector: clip name}")
-    return pairs
-
-
-class _ClipTargets(NamedTuple):
-    """What the clip asks for, per frame: root pose (F, 4, 4), targets, their positions (F, m, 3) [m] and
-    orientations (F, m, 3, 3)."""
-
-    world_from_root: np.ndarray
-    targets: list[dict[str, Target]]
-    positions: np.ndarray
-    rotations: np.ndarray
-
-
-def _clip_targets(motion: Motion, root_in_clip: int, names: tuple[str, ...], clip_frames: list[int],
-                  position_only: bool) -> _ClipTargets:
-    """Targets and root poses from the clip's own forward kinematics."""
-    F = motion.n_frames
-    W = np.empty((F, 4, 4))
-    targets: list[dict[str, Target]] = []
-    target_p = np.empty((F, len(names), 3))
-    target_R = np.empty((F, len(names), 3, 3))
-    for f in range(F):
-        R, p = motion.frames(f)
-        W[f] = transform(R[root_in_clip], p[root_in_clip])
-        target_p[f] = p[clip_frames]
-        target_R[f] = R[clip_frames]
-        targets.append({n: Target(p[c], None if position_only else R[c]) for n, c in zip(names, clip_frames)})
-    return _ClipTargets(W, targets, target_p, target_R)
-
-
-def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int):
-    """Solve frame 0 in full, then warm-started steps per frame; only the solver calls are timed.
+def _follow(solver: Solver, clip: ClipTargets, steps_per_frame: int, reference: np.ndarray | None,
+            posture_weight: float, progress):
+    """Solve frame 0 in full, then steps per frame; only the solver calls are timed.
 
     Returns ``(Q (F, n_dofs) [rad], seconds (F,), steps (F,), statuses)``.
     """
@@ -244,35 +245,83 @@ def _follow(solver: Solver, clip: _ClipTargets, steps_per_frame: int):
     for f in range(F):
         start = time.perf_counter()
         if f == 0:
+            if reference is not None:
+                solver.set_posture(reference[0], posture_weight)
             result = solver.solve(clip.targets[0])
-            steps[f] = result.iterations
+            Q[f], status, steps[f] = result.q, result.status, result.iterations
         else:
-            solver.set_world_from_root(clip.world_from_root[f])
-            solver.set_targets(clip.targets[f])
-            for k in range(steps_per_frame):
-                result = solver.step()
-                steps[f] = k + 1
-                if result.converged:
-                    break
+            Q[f], status, steps[f] = _frame(solver, clip, f, reference, posture_weight, steps_per_frame)
         seconds[f] = time.perf_counter() - start
-        Q[f] = result.q
-        statuses.append(result.status)
+        statuses.append(status)
+        if progress is not None:
+            progress(f + 1, F)
     return Q, seconds, steps, statuses
 
 
-def _errors(skeleton: Skeleton, root: str, Q: np.ndarray, clip: _ClipTargets, eff_frames: np.ndarray,
-            position_only: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Distance (F, m) [m] and angle (F, m) [rad] of each effector to its target, by forward kinematics."""
+def _frame(solver: Solver, clip: ClipTargets, f: int, reference: np.ndarray | None, posture_weight: float,
+           steps_per_frame: int) -> tuple[np.ndarray, Status, int]:
+    """One later frame: ``(q (n_dofs,) [rad], status, steps taken)``.
+
+    With a ``reference`` (F, n_dofs) the frame starts from it and keeps it as
+    the posture: what no target needs stays exactly on it, the rest moves only
+    as far as the targets ask; where it already meets every target no step is
+    taken. Without, the steps are warm-started from the previous frame.
+    """
+    solver.set_world_from_root(clip.world_from_root[f])
+    if reference is not None:
+        solver.set_q(reference[f])
+        if _meets(solver, clip.targets[f]):
+            return solver.q, Status.CONVERGED, 0
+        solver.set_posture(reference[f], posture_weight)
+    solver.set_targets(clip.targets[f])
+    for k in range(steps_per_frame):
+        result = solver.step()
+        if result.converged:
+            break
+    return result.q, result.status, k + 1
+
+
+def _meets(solver: Solver, targets: dict) -> bool:
+    """True when the solver's current pose is within its tolerances of every target."""
+    s = solver.settings
+    p, R = solver.world_positions(), solver.world_rotations()
+    for name, t in targets.items():
+        i = solver.skeleton.frame_of(name)
+        if np.linalg.norm(p[i] - t.position) > s.position_tolerance:
+            return False
+        if t.uses_orientation:
+            cos = 0.5 * (np.trace(R[i].T @ t.orientation) - 1.0)
+            if np.arccos(np.clip(cos, -1.0, 1.0)) > s.orientation_tolerance:
+                return False
+    return True
+
+
+def _measure(skeleton: Skeleton, root: str, Q: np.ndarray, clip: ClipTargets, motion: Motion, plan: TargetPlan):
+    """By forward kinematics of the solved angles: the targets' distances (F, m) [m] and angles (F, m) [rad],
+    then every shared joint and site's name, distance to the clip (F, k) [m] and the clip's height [m]."""
     F, m = clip.positions.shape[:2]
-    pos = np.empty((F, m))
-    ori = np.zeros((F, m))
+    frames = np.array([skeleton.frame_of(n) for n in plan.names], dtype=np.int64)
+    body = _shared_names(skeleton, motion.skeleton)
+    mine = [skeleton.frame_of(n) for n in body]
+    theirs = [motion.skeleton.frame_of(n) for n in body]
+    pos, ori, body_err = np.empty((F, m)), np.zeros((F, m)), np.empty((F, len(body)))
+    heights = np.empty(F)
+    oriented = ~np.array(plan.position_only, dtype=bool)
     for f in range(F):
         R, p = world_frames(skeleton, Q[f], clip.world_from_root[f], root)
-        pos[f] = np.linalg.norm(p[eff_frames] - clip.positions[f], axis=1)
-        if not position_only:
-            cos = (np.einsum("kij,kij->k", R[eff_frames], clip.rotations[f]) - 1.0) * 0.5
-            ori[f] = np.arccos(np.clip(cos, -1.0, 1.0))
-    return pos, ori
+        pos[f] = np.linalg.norm(p[frames] - clip.positions[f], axis=1)
+        cos = (np.einsum("kij,kij->k", R[frames], clip.rotations[f]) - 1.0) * 0.5
+        ori[f] = np.where(oriented, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
+        clip_p = motion.frames(f)[1]
+        body_err[f] = np.linalg.norm(p[mine] - clip_p[theirs], axis=1)
+        heights[f] = np.ptp(clip_p[:, 2])
+    return (_readonly(pos), _readonly(ori), tuple(body), _readonly(body_err), float(np.median(heights)))
 
 
-__all__ = ["TrackResult", "TrackSummary", "track_clip"]
+def _shared_names(skeleton: Skeleton, clip_sk: Skeleton) -> list[str]:
+    """The joints and sites of ``skeleton`` that the clip's skeleton also has, in ``skeleton``'s order."""
+    theirs = set(clip_sk.joint_names) | set(clip_sk.site_names)
+    return [n for n in [*skeleton.joint_names, *skeleton.site_names] if n in theirs]
+
+
+__all__ = ["JOINT_PRIORITY", "BodyError", "TrackResult", "TrackSummary", "track_clip"]

@@ -1,4 +1,4 @@
-"""The commands but ``info``: solve, walk, scenarios, track, bench. Each ``cmd_*`` takes the parsed options and
+"""The commands but ``info`` and ``track``: solve, walk, scenarios, bench. Each ``cmd_*`` takes the parsed options and
 the output stream and returns the exit code."""
 
 from __future__ import annotations
@@ -13,8 +13,7 @@ import gsik
 from gsik.cli.common import (PROG, CommandError, check_out, deg, load_any_skeleton, make_dir, mm, settings_overrides,
                              split_names)
 from gsik.cli.progress import progress_for
-from gsik.io.bvh import read_bvh
-from gsik.io.bvh_skeleton import import_bvh, write_motion_bvh
+from gsik.io.bvh_skeleton import write_motion_bvh
 from gsik.io.files import read_text
 from gsik.io.pose import read_pose, write_pose
 
@@ -98,7 +97,7 @@ def cmd_walk(args: argparse.Namespace, out: TextIO) -> int:
         _warn(f"some targets stayed {mm(m.max_tracking_error)} away: the gait is partly out of "
               "reach (try a shorter --step-length, a larger --pelvis-drop or a lower --cadence)")
     if args.out:
-        write_motion_bvh(args.out, result.motion, units=args.units, up=args.up)
+        write_motion_bvh(args.out, result.motion, units=args.units, up=args.up, end_sites=args.end_sites)
         out.write(f"wrote {args.out} ({m.n_frames} frames, {args.units}, {args.up} up)\n")
     return 0
 
@@ -165,55 +164,9 @@ def _write_scenario_files(args: argparse.Namespace, folder, scenarios: list, rep
 
     for s, r in zip(scenarios, reports):
         write_pose(folder / f"{s.name}.yaml", scenario_pose(s, r.motion.q[-1]))
-        write_motion_bvh(folder / f"{s.name}.bvh", r.motion, units=args.units, up=args.up)
+        write_motion_bvh(folder / f"{s.name}.bvh", r.motion, units=args.units, up=args.up, end_sites=args.end_sites)
     out.write(f"wrote {2 * len(scenarios)} files to {args.out} (<scenario>.yaml: the final pose and its "
               f"targets; <scenario>.bvh: every frame of the run)\n")
-
-
-# -- track ----------------------------------------------------------------------------------------------
-
-
-def cmd_track(args: argparse.Namespace, out: TextIO) -> int:
-    from gsik.anim.tracking import track_clip
-
-    if args.out:
-        check_out(args.out, (".bvh",), "BVH")
-    effectors = split_names(args.effectors)
-    clip = read_bvh(args.clip)
-    imported = import_bvh(clip, effectors, strip_namespace=args.strip_namespace,
-                          up=args.file_up, **({"scale": args.scale} if args.scale else {}))
-    for w in imported.warnings:
-        _warn(w)
-    sk = imported.skeleton
-    options = dict(settings_overrides(args))
-    if args.steps_per_frame:
-        options["steps_per_frame"] = args.steps_per_frame
-    result = track_clip(sk, imported.motion, effectors, root=args.root, position_only=args.position_only, **options)
-    out.write(f"clip {args.clip}: {clip.n_frames} frames at {1 / clip.frame_time:g} fps, {sk.n_joints} joints, "
-              f"{sk.n_dofs} DOF (scale {imported.scale:g} m per unit, {imported.up} up)\n")
-    out.write(f"tracked {', '.join(result.effector_names)} with root {result.motion.roots[0]}"
-              f"{' (positions only)' if args.position_only else ''}\n")
-    _write_track_summary(out, result, clip.n_frames)
-    if args.out:
-        write_motion_bvh(args.out, result.motion, units=args.units, up=args.up)
-        out.write(f"wrote {args.out}\n")
-    return 0
-
-
-def _write_track_summary(out: TextIO, result, n_frames: int) -> None:
-    """Errors and time per frame over frames 1.., then each effector's mean and largest error."""
-    s = result.summary()
-    out.write(f"frames 1-{n_frames - 1} (frame 0 is a full solve from the rest pose):\n")
-    out.write(f"  position error:    mean {mm(s.mean_position_error)}, median of frame max "
-              f"{mm(s.median_position_error)}, max {mm(s.max_position_error)}\n")
-    out.write(f"  orientation error: mean {deg(s.mean_orientation_error)}, max {deg(s.max_orientation_error)}\n")
-    out.write(f"  time per frame:    median {s.median_frame_seconds * 1e3:.3f} ms, "
-              f"max {s.max_frame_seconds * 1e3:.3f} ms\n")
-    w = max((len(n) for n in result.effector_names), default=8)
-    out.write(f"  {'effector':<{w}}  {'mean':>12}  {'max':>12}\n")
-    for k, name in enumerate(result.effector_names):
-        col = result.position_errors[1:, k] if result.position_errors.shape[0] > 1 else result.position_errors[:, k]
-        out.write(f"  {name:<{w}}  {mm(float(col.mean())):>12}  {mm(float(col.max())):>12}\n")
 
 
 # -- bench ------------------------------------------------------------------------------------------------

@@ -9,7 +9,8 @@ from collections.abc import Sequence
 from typing import TextIO
 
 import gsik
-from gsik.cli.commands import cmd_bench, cmd_scenarios, cmd_solve, cmd_track, cmd_walk
+from gsik.cli.commands import cmd_bench, cmd_scenarios, cmd_solve, cmd_walk
+from gsik.cli.track import cmd_track
 from gsik.cli.common import PROG
 from gsik.cli.info import cmd_info
 from gsik.errors import GsikError
@@ -51,6 +52,8 @@ def _add_bvh_out(p: argparse.ArgumentParser) -> None:
     g.add_argument("--units", choices=("cm", "m"), default="cm", help="BVH length unit (default cm)")
     g.add_argument("--up", choices=("z", "y"), default="z", help="BVH up axis (default z, as gsik; y for most "
                    "animation packages)")
+    g.add_argument("--end-sites", action="store_true", help="write a site that is its joint's only child as an "
+                   "End Site (no extra bone in Blender; a re-import names it <joint>_end)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -125,23 +128,46 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(p)
     p.set_defaults(run=cmd_scenarios)
 
-    p = add("track", "track a BVH clip's effectors frame by frame; report errors and time per frame",
-            "Import a BVH clip as a skeleton and motion, then solve its own effector poses frame by frame, "
-            "warm-started (motion-capture cleanup's core loop). Prints position and orientation errors and "
-            "the solver time per frame; --out writes the solved motion.")
-    p.add_argument("clip", metavar="CLIP.bvh", help="a BVH file")
-    p.add_argument("--effectors", nargs="+", action="extend", metavar="NAME",
+    p = add("track", "track a BVH clip (or a folder of clips) frame by frame; report every joint's error",
+            "Import a BVH clip as a skeleton and motion, then solve its targets frame by frame, warm-started "
+            "(motion-capture cleanup's core loop). By default the clip's own pose of each frame is the preferred "
+            "posture, so every joint the targets do not need follows the clip, and the output keeps the input's "
+            "conventions (names, End Sites, channels, root OFFSET, units, up axis, frame time). Prints the "
+            "targets' errors, every joint's error against the clip and the time per frame. CLIP may be a folder: "
+            "its clips are tracked in parallel worker processes (--out names a folder then) with one summary "
+            "table.")
+    p.add_argument("clip", metavar="CLIP.bvh|DIR", help="a BVH file, or a folder of them")
+    g = p.add_argument_group("targets")
+    g.add_argument("--effectors", nargs="+", action="extend", metavar="NAME",
                    help="joints or end sites to track (names or a comma list; default every end site and the "
-                        "pelvis)")
-    p.add_argument("--root", help="the IK root, pinned where the clip has it (default the top joint)")
-    p.add_argument("--position-only", action="store_true", help="track positions only")
-    p.add_argument("--strip-namespace", action="store_true", help="drop 'prefix:' from joint names")
-    p.add_argument("--scale", type=_finite, help="metres per file unit (default: detected)")
-    p.add_argument("--file-up", choices=("auto", "y", "z"), default="auto", help="the clip's up axis")
+                        "pelvis), e.g. LeftKnee,mixamorig:LeftHand")
+    g.add_argument("--position-only", nargs="?", action="append", const="*", metavar="NAMES",
+                   help="track positions only: all targets, or the ones named (a comma list)")
+    g.add_argument("--priority", nargs="+", action="extend", metavar="NAME=LEVEL",
+                   help="priority levels, 0 the most important (default: end sites 0, other joints 1)")
+    g.add_argument("--pole", nargs="+", action="extend", metavar="NAME",
+                   help="knees or elbows to hold where the clip has them (position only, below every other "
+                        "target): the limb's plane follows the clip")
+    g.add_argument("--root", help="the IK root, pinned where the clip has it (default the top joint)")
+    g.add_argument("--no-follow-clip", dest="follow_clip", action="store_false",
+                   help="no preferred posture: frame 0 from the rest pose, untracked joints go where the solver "
+                        "puts them (the solver measure)")
+    g.add_argument("--posture-weight", type=_finite, default=1.0, help="weight of the clip's pose (default 1)")
+    g = p.add_argument_group("input")
+    g.add_argument("--strip-namespace", action="store_true",
+                   help="drop 'prefix:' from joint names for the target options (the output keeps them)")
+    g.add_argument("--scale", type=_finite, help="metres per file unit (default: detected)")
+    g.add_argument("--file-up", choices=("auto", "y", "z"), default="auto",
+                   help="the clip's up axis (default: detected over the whole clip, with a note why)")
     p.add_argument("--steps-per-frame", type=_positive_int, help="most solver steps per frame (default 5)")
-    p.add_argument("--out", metavar="SOLVED.bvh", help="write the solved motion as BVH")
-    _add_bvh_out(p)
-    _add_common(p, progress=False)
+    p.add_argument("--workers", type=_positive_int, help="worker processes for a folder (default: one per core)")
+    p.add_argument("--out", metavar="SOLVED.bvh|DIR", help="write the solved motion as BVH (a folder for a folder)")
+    g = p.add_argument_group("BVH output (default: the input's conventions)")
+    g.add_argument("--units", choices=("cm", "m"), help="change the length unit (writes gsik's layout)")
+    g.add_argument("--up", choices=("z", "y"), help="change the up axis (writes gsik's layout)")
+    g.add_argument("--wrap-angles", action="store_true",
+                   help="write angles in [-180, 180) (default: continuous, as tracked)")
+    _add_common(p)
     p.set_defaults(run=cmd_track)
 
     p = add("bench", "the solver benchmarks (paper Table 1, tracking, stability, reach)",

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import gsik
+import gsik.io.bvh
 from gsik.io.bvh import format_bvh, parse_bvh
 from gsik.io.bvh_skeleton import import_bvh, motion_to_bvh
 from gsik.errors import SolverError
@@ -38,7 +39,8 @@ def reimported():
 
 
 def test_a_reimported_clip_is_tracked_closely(reimported):
-    result = track_clip(reimported.skeleton, reimported.motion, effectors=SIX)
+    # The plain solver measure: warm-started from the rest pose, no posture.
+    result = track_clip(reimported.skeleton, reimported.motion, effectors=SIX, follow_clip=False)
     assert isinstance(result, TrackResult)
     F = reimported.motion.n_frames
     assert result.effector_names == ("head", "pelvis", "left_hand", "right_hand", "left_foot", "right_foot")
@@ -110,3 +112,67 @@ def test_tracking_rejects_unknown_names_and_bad_arguments(reimported):
     empty = Motion(sk, np.zeros((0, sk.n_dofs)), (), np.zeros((0, 4, 4)), 0.1)
     with pytest.raises(SolverError, match="no frames"):
         track_clip(sk, empty)
+
+
+# -- issue 9: keeping the clip's body ---------------------------------------------------------------
+
+DATA = __import__("pathlib").Path(__file__).resolve().parents[1] / "data"
+
+
+def test_following_the_clip_keeps_every_joint_where_the_clip_has_it(reimported):
+    sk, motion = reimported.skeleton, reimported.motion
+    kept = track_clip(sk, motion, effectors=["left_hand", "right_foot"])
+    assert kept.body_height == pytest.approx(np.median(np.ptp(motion.positions()[:, :, 2], axis=1)))
+    assert set(kept.body_names) == set(sk.joint_names) | set(sk.site_names)
+    assert kept.body_errors.shape == (motion.n_frames, len(kept.body_names))
+    assert kept.body_errors.max() < 1e-3 and kept.position_errors.max() < 1e-3
+    assert np.all(kept.steps[1:] == 0)  # the clip's own pose meets its own targets: no step needed
+    # The plain solver measure: from the rest pose, no posture; the untracked joints go their own way.
+    plain = track_clip(sk, motion, effectors=["left_hand", "right_foot"], follow_clip=False)
+    table = plain.body_table()
+    assert table[0].max_error > 0.02 and not table[0].tracked
+    assert [r.percentile_error for r in table] == sorted((r.percentile_error for r in table), reverse=True)
+
+
+def test_untracked_dofs_follow_the_clip_exactly(reimported):
+    sk, motion = reimported.skeleton, reimported.motion
+    result = track_clip(sk, motion, effectors=["left_hand"])
+    # The right arm and the legs are not needed by the left hand: they pass through.
+    for name in ("right_elbow.x", "left_knee.x", "right_hip.y"):
+        d = sk.dof_index(name)
+        np.testing.assert_allclose(result.motion.q[:, d], motion.q[:, d], atol=1e-6)
+
+
+def test_joints_are_targets_with_their_own_priority_and_position_only(reimported):
+    sk, motion = reimported.skeleton, reimported.motion
+    result = track_clip(sk, motion, effectors=["left_hand", "left_knee", "right_elbow"],
+                        position_only=["left_knee"], priorities={"right_elbow": 2}, follow_clip=False)
+    assert result.effector_names == ("left_hand", "left_knee", "right_elbow")
+    assert np.all(result.orientation_errors[:, 1] == 0.0) and result.orientation_errors[:, 2].max() > 0.0
+    assert result.position_errors[5:].max() < 0.01
+    with pytest.raises(SolverError, match="position_only names 'head', which is not tracked"):
+        track_clip(sk, motion, effectors=["left_hand"], position_only=["head"])
+    with pytest.raises(SolverError, match="priorities name 'head', which is not tracked"):
+        track_clip(sk, motion, effectors=["left_hand"], priorities={"head": 1})
+    with pytest.raises(SolverError, match="priority of 'left_hand' must be a whole number >= 0"):
+        track_clip(sk, motion, effectors=["left_hand"], priorities={"left_hand": -1})
+
+
+def test_a_wrapping_channel_is_followed_continuously():
+    clip = gsik.io.bvh.read_bvh(DATA / "wrap_channel.bvh")
+    targets = ["LeftHand_end", "LeftFoot_end"]
+    unwrapped = import_bvh(clip)
+    result = track_clip(unwrapped.skeleton, unwrapped.motion, targets)
+    assert result.position_errors.max() < 1e-3 and result.body_errors.max() < 0.01
+    plain = track_clip(unwrapped.skeleton, unwrapped.motion, targets, follow_clip=False)
+    assert plain.position_errors.max() < 1e-3
+    # The solved spine turns continuously through +-180 degrees, as the clip does once unwrapped.
+    spine = np.degrees(result.motion.q[:, unwrapped.skeleton.dof_index("Spine.y")])
+    assert np.abs(np.diff(spine)).max() < 15 and np.abs(spine).max() > 180
+
+
+def test_progress_is_called_once_per_frame(reimported):
+    calls = []
+    track_clip(reimported.skeleton, reimported.motion, effectors=["head"], progress=lambda d, t: calls.append((d, t)))
+    F = reimported.motion.n_frames
+    assert calls == [(f + 1, F) for f in range(F)]

@@ -16,8 +16,10 @@ from gsik.io.bvh_skeleton import (
     EULER_ORDER,
     Z_UP_TO_Y_UP,
     BvhImportWarning,
+    clip_with_motion,
     detect_scale,
     detect_up,
+    detect_up_reason,
     euler_from_matrix,
     import_bvh,
     matrix_from_euler,
@@ -67,8 +69,9 @@ def smooth_motion(sk: gsik.Skeleton, n_frames: int, seed: int, roots=None) -> Mo
     return Motion(sk, q, tuple(roots), W_root, 1.0 / 30.0)
 
 
-def round_trip(motion: Motion, file_units: str, file_up: str, **import_options):
-    text = format_bvh(motion_to_bvh(motion, units=file_units, up=file_up), PRECISION[file_units])
+def round_trip(motion: Motion, file_units: str, file_up: str, pad_rotations: bool = True, **import_options):
+    clip = motion_to_bvh(motion, units=file_units, up=file_up, pad_rotations=pad_rotations)
+    text = format_bvh(clip, PRECISION[file_units])
     return import_bvh(parse_bvh(text), **import_options)
 
 
@@ -147,8 +150,15 @@ def test_export_of_the_biped_is_rooted_at_hips_with_exact_channels(biped):
     assert np.array_equal(clip.joints[0].offset, [0.0, 0.0, 0.0])
     by_name = {j.name: j for j in clip.joints}
     assert by_name["left_hip"].channels == ("Xrotation", "Yrotation", "Zrotation")
-    assert by_name["left_knee"].channels == ("Xrotation",)
-    assert by_name["atlas"].channels == ("Xrotation", "Yrotation")
+    # Knees and the atlas get three rotation channels (Blender needs 0 or 3), the added ones locked at 0 ...
+    assert by_name["left_knee"].channels == ("Xrotation", "Yrotation", "Zrotation")
+    assert by_name["atlas"].channels == ("Xrotation", "Yrotation", "Zrotation")
+    knee = clip.channel_index("left_knee")
+    assert np.array_equal(clip.motion[:, knee][:, 1:], np.zeros((1, 2)))
+    # ... or only their own with pad_rotations=False.
+    exact = {j.name: j for j in pose_to_bvh(biped, biped.rest, pad_rotations=False).joints}
+    assert exact["left_knee"].channels == ("Xrotation",)
+    assert exact["atlas"].channels == ("Xrotation", "Yrotation")
     np.testing.assert_allclose(by_name["left_knee"].offset, [0.0, 0.0, -42.0])  # centimetres by default
     # The root channels carry the top joint's world pose: where the definition stands it by default...
     np.testing.assert_allclose(clip.motion[0, :6], [0.0, 0.0, 97.97, 0.0, 0.0, 0.0], atol=1e-9)
@@ -225,7 +235,13 @@ def test_round_trip_reproduces_every_joint_and_site_of_the_biped(biped, rng, uni
 
 
 def test_round_trip_keeps_the_biped_structure(biped):
-    imported = round_trip(smooth_motion(biped, 5, seed=1), "cm", "z").skeleton
+    padded = round_trip(smooth_motion(biped, 5, seed=1), "cm", "z")
+    # The locked channels of knees, elbows and atlas come back as DOFs that stay 0.
+    extra = sorted(set(padded.skeleton.dof_names) - set(biped.dof_names))
+    assert extra == sorted(f"{j}.{a}" for j, a in [("atlas", "z"), *((f"{s}_{j}", a) for s in ("left", "right")
+                                                    for j in ("elbow", "knee") for a in "yz")])
+    assert not np.any(padded.motion.q[:, [padded.skeleton.dof_index(n) for n in extra]])
+    imported = round_trip(smooth_motion(biped, 5, seed=1), "cm", "z", pad_rotations=False).skeleton
     assert set(imported.joint_names) == set(biped.joint_names)
     assert set(imported.site_names) == set(biped.site_names)
     assert sorted(imported.dof_names) == sorted(biped.dof_names)
@@ -367,8 +383,9 @@ def test_import_keeps_each_channel_order_and_reproduces_its_forward_kinematics(o
     np.testing.assert_array_equal(axes, [np.eye(3)["xyz".index(a)] for a in order])
     got = result.motion.positions()[:, [sk.frame_of(j.name) for j in clip.joints]]
     np.testing.assert_allclose(got, clip_world_positions(clip, 1.0, "z"), atol=1e-9)
-    np.testing.assert_allclose(result.motion.q[:, sk.dof_index(f"Arm.{order[0]}")], np.radians(degrees[:, 3]),
-                               atol=1e-12)
+    # The angles are the file's, unwrapped: equal up to whole turns.
+    turns = (result.motion.q[:, sk.dof_index(f"Arm.{order[0]}")] - np.radians(degrees[:, 3])) / (2 * np.pi)
+    np.testing.assert_allclose(turns, np.round(turns), atol=1e-12)
 
 
 def test_import_of_a_y_up_file_turns_it_to_z_up():
@@ -427,11 +444,12 @@ def test_import_makes_zero_channel_joints_with_children_fixed_joints():
 
 def test_import_limits_contain_every_frame(rng):
     degrees = rng.uniform(-60, 60, (8, 9))
-    degrees[3, 5] = 250.0  # beyond half a turn
+    degrees[:, 5] = np.linspace(0.0, 250.0, 8)  # beyond half a turn, continuously
     clip = one_joint_clip("zxy", degrees)
     wide = import_bvh(clip, up="z").skeleton
     d = wide.dof_index("Arm.y")
-    assert wide.lower[d] == -np.pi and wide.upper[d] == pytest.approx(np.radians(250.0))
+    # Past half a turn: half a turn of room beyond the clip's range on both sides.
+    assert wide.lower[d] == pytest.approx(-np.pi) and wide.upper[d] == pytest.approx(np.radians(250.0 + 180.0))
     assert wide.lower[wide.dof_index("Arm.z")] == -np.pi and wide.upper[wide.dof_index("Arm.z")] == np.pi
     tight = import_bvh(clip, up="z", limits="from_motion", margin=0.1)
     sk, q = tight.skeleton, tight.motion.q
@@ -480,3 +498,90 @@ def test_imported_clip_with_no_frames_gives_an_empty_motion():
     result = import_bvh(clip, up="z")
     assert result.motion.n_frames == 0
     assert result.skeleton.n_dofs == 6
+
+
+# ---------------------------------------------------------------------------
+# Issue 9: padded short joints, wrapping channels, whole-clip up axis, writing back into the clip
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("up", ["z", "y"])
+def test_padded_short_joints_keep_every_frame_of_the_motion(biped, up):
+    motion = smooth_motion(biped, 12, seed=5)
+    padded = motion_to_bvh(motion, units="m", up=up)
+    exact = motion_to_bvh(motion, units="m", up=up, pad_rotations=False)
+    rotations = {j.name: [c for c in j.channels if c.endswith("rotation")] for j in padded.joints}
+    assert all(len(r) in (0, 3) for r in rotations.values())
+    # One order for every rotating joint but the root (which turns about the vertical first).
+    assert len({tuple(r) for name, r in rotations.items() if r and name != "hips"}) == 1
+    np.testing.assert_allclose(bvh_forward_kinematics(padded)[1], bvh_forward_kinematics(exact)[1], atol=1e-12)
+
+
+def test_export_with_end_sites_writes_lone_sites_as_end_sites(biped):
+    clip = pose_to_bvh(biped, biped.rest, end_sites=True)
+    assert "left_hand" not in clip.names and "head" in clip.names  # the atlas holds head and head_top: joints
+    hand = clip.joint_index("left_elbow_end")
+    assert clip.joints[hand].is_end_site
+    np.testing.assert_allclose(clip.joints[hand].offset, 100 * biped.frame_offset[biped.frame_of("left_hand")])
+
+
+def test_import_unwraps_a_wrapping_channel_and_its_limits_follow():
+    clip = read_bvh(DATA / "wrap_channel.bvh")
+    raw = clip.motion[:, clip.channel_index("Spine").start + 1]
+    assert np.abs(np.diff(raw)).max() > 300  # the file wraps: +178 -> -178
+    imported = import_bvh(clip)
+    sk, q = imported.skeleton, imported.motion.q
+    d = sk.dof_index("Spine.y")
+    assert np.abs(np.diff(np.degrees(q[:, d]))).max() < 15  # continuous
+    turns = (q[:, d] - np.radians(raw)) / (2 * np.pi)
+    np.testing.assert_allclose(turns, np.round(turns), atol=1e-12)
+    assert sk.lower[d] <= q[:, d].min() and q[:, d].max() <= sk.upper[d] and np.abs(q[:, d]).max() > np.pi
+    # Unwrapping changes nothing in the poses.
+    np.testing.assert_allclose(imported.motion.positions()[:, [sk.frame_of(n) for n in clip.names]],
+                               clip_world_positions(clip, 0.01, "y"), atol=1e-9)
+
+
+def test_up_axis_is_judged_over_the_whole_clip_not_its_rest_pose_or_first_frame():
+    clip = read_bvh(DATA / "up_misleading_first_frame.bvh")
+    rest = clip_world_positions(BvhClip(clip.joints, clip.frame_time, np.zeros((1, clip.n_channels))), 1.0, "z")
+    first = bvh_forward_kinematics(clip)[1][0]
+    assert np.ptp(rest[0][:, 2]) > np.ptp(rest[0][:, 1]) and np.ptp(first[:, 2]) > np.ptp(first[:, 1])
+    assert detect_up(clip) == "y"
+    up, why = detect_up_reason(clip)
+    assert up == "y" and why.startswith("y up: over 30 frames the body is")
+    assert import_bvh(clip).up_reason == why
+    assert import_bvh(clip, up="z").up_reason == "as given"
+
+
+@pytest.mark.parametrize("name", ["wrap_channel.bvh", "mixamo_zyx_crlf.bvh", "blender_chain_zyx_m.bvh"])
+def test_clip_with_its_own_motion_is_the_clip(name):
+    clip = read_bvh(DATA / name)
+    imported = import_bvh(clip, strip_namespace=name.startswith("mixamo"))
+    back = clip_with_motion(imported, imported.motion)
+    assert back.joints == clip.joints and back.frame_time == clip.frame_time
+    diff = back.motion - clip.motion
+    np.testing.assert_allclose(diff, 360.0 * np.round(diff / 360.0), atol=1e-9)  # whole turns at most
+    np.testing.assert_allclose(clip_with_motion(imported, imported.motion, wrap_angles=True).motion,
+                               _wrapped(clip), atol=1e-9)
+
+
+def _wrapped(clip: BvhClip) -> np.ndarray:
+    """The clip's motion with its rotation channels in [-180, 180)."""
+    out = clip.motion.copy()
+    rot = [k for k, c in enumerate(c for j in clip.joints for c in j.channels) if c.endswith("rotation")]
+    out[:, rot] = np.remainder(out[:, rot] + 180.0, 360.0) - 180.0
+    return out
+
+
+def test_clip_with_motion_recomputes_the_root_when_another_joint_was_pinned():
+    clip = read_bvh(DATA / "walk_zxy.bvh")
+    imported = import_bvh(clip)
+    sk, motion = imported.skeleton, imported.motion
+    foot = "LeftLeg_end"
+    W = np.array([gsik.rotations.transform(*[a[sk.frame_of(foot)] for a in motion.frames(f)])
+                  for f in range(motion.n_frames)])
+    repinned = Motion(sk, motion.q, (foot,) * motion.n_frames, W, motion.frame_time)
+    back = clip_with_motion(imported, repinned)
+    np.testing.assert_allclose(bvh_forward_kinematics(back)[1], bvh_forward_kinematics(clip)[1], atol=1e-6)
+    with pytest.raises(BvhError, match="the motion has 2 frames, the clip 4"):
+        clip_with_motion(imported, Motion(sk, motion.q[:2], motion.roots[:2], motion.world_from_root[:2], 0.1))

@@ -21,10 +21,15 @@ Conventions of the export (:func:`motion_to_bvh`, :func:`pose_to_bvh`,
   round never meets gimbal lock).
 * **Joints.** Every other gsik joint is a ``JOINT`` with its definition offset.
   A joint whose rotation axes are coordinate axes (after the up-axis change)
-  and that has no fixed ``orientation`` gets exactly its one-DOF rotations as
-  channels, in its own order, angles in degrees (the biped's knee is
-  ``CHANNELS 1 Xrotation``, its hip ``Xrotation Yrotation Zrotation``). Any
-  other joint (a fixed ``orientation``, oblique axes) gets three channels in
+  and that has no fixed ``orientation`` gets its one-DOF rotations as
+  channels, in its own order, angles in degrees (the biped's hip is
+  ``Xrotation Yrotation Zrotation``). A joint with one or two such rotations
+  gets three rotation channels all the same (``pad_rotations=True``, the
+  default; Blender's importer accepts only 0 or 3): the missing axes locked
+  at 0, placed where the skeleton's usual order puts them if the joint's own
+  axes keep that order, else after them (the biped's knee is ``CHANNELS 3
+  Xrotation Yrotation Zrotation`` z-up, the 0s changing nothing). Any other
+  joint (a fixed ``orientation``, oblique axes) gets three channels in
   :data:`EULER_ORDER`, decomposed from its local rotation matrix, unwrapped
   over the frames so the angles are continuous. A joint without rotations
   gets ``CHANNELS 0``.
@@ -34,6 +39,9 @@ Conventions of the export (:func:`motion_to_bvh`, :func:`pose_to_bvh`,
   clip has the same effectors; readers that draw bones show the forearm ending
   at the hand. A site's fixed orientation is not written (BVH has no place for
   it). A joint with neither child joints nor sites gets a zero ``End Site``.
+  With ``end_sites=True`` a site that is its joint's only child is written as
+  that joint's ``End Site`` instead (no extra bone in Blender, but the name is
+  lost: a re-import calls it ``<joint>_end``).
 * **Units.** ``units="cm"`` (the default: most animation tools expect
   centimetres) or ``"m"``.
 * **Up axis.** ``up="z"`` (the default, gsik's own world) or ``"y"``: the
@@ -72,14 +80,28 @@ Conventions of the import (:func:`import_bvh`, :func:`skeleton_from_bvh`):
 * **Units.** ``scale`` is metres per file unit. By default it is detected from
   the size of the rest pose (the hierarchy's offsets, root offset excluded):
   up to 10 units across is metres, up to 1000 centimetres, more millimetres.
-* **Up axis.** ``up="auto"`` (the default) takes y when the rest pose is taller
-  along y than along z, else z; a y-up file is turned to gsik's z-up world
-  (the inverse of the export's turn), so an export with either ``up``
-  re-imports exactly.
-* **Limits.** ``limits="wide"``: [-pi, pi] for each angle, widened where the
-  clip goes further; ``"from_motion"``: the clip's range of each angle plus
-  ``margin`` on both sides. Either way every frame of the clip lies within the
-  limits. The rest angle is 0 (the file's rest pose), clamped into the limits.
+* **Up axis.** ``up="auto"`` (the default) judges the whole clip
+  (:func:`detect_up_reason`): the axis along which the body is tallest in the
+  median frame, gravity (the lowest point keeps its height along the up axis)
+  deciding close calls; a y-up file is turned to gsik's z-up world (the
+  inverse of the export's turn), so an export with either ``up`` re-imports
+  exactly.
+* **Angles** are unwrapped per channel: a channel that jumps by about 360
+  degrees between frames (-178 to +180) continues past 180 instead, so the
+  motion's angles are continuous and the solver never meets a limit the clip
+  only crosses by wrapping.
+* **Limits.** ``limits="wide"``: [-pi, pi] for each angle; an (unwrapped)
+  angle that goes further gets half a turn of room beyond the clip's range on
+  both sides, so a spinning joint never meets a limit the clip does not;
+  ``"from_motion"``: the clip's range of each
+  angle plus ``margin`` on both sides. Either way every frame of the clip lies
+  within the limits. The rest angle is 0 (the file's rest pose), clamped into
+  the limits.
+
+Writing a solved motion back (:func:`clip_with_motion`): the clip a motion
+was imported from, its motion numbers replaced, so the output keeps the
+input's names (namespaces included), End Sites, root OFFSET and channels,
+channel orders, units, up axis, frame time and frame count.
 
 Conversion errors raise :class:`~gsik.errors.BvhError`.
 """
@@ -89,7 +111,9 @@ from gsik.io.bvh_skeleton.conventions import (
     matrix_from_euler,
 )
 from gsik.io.bvh_skeleton.export import motion_to_bvh, pose_to_bvh, write_motion_bvh
-from gsik.io.bvh_skeleton.importer import BvhImport, detect_scale, detect_up, import_bvh, skeleton_from_bvh
+from gsik.io.bvh_skeleton.keep import clip_with_motion
+from gsik.io.bvh_skeleton.importer import (BvhImport, detect_scale, detect_up, detect_up_reason, import_bvh,
+                                          skeleton_from_bvh)
 
 __all__ = [
     "EULER_ORDER",
@@ -99,8 +123,10 @@ __all__ = [
     "Z_UP_TO_Y_UP",
     "BvhImport",
     "BvhImportWarning",
+    "clip_with_motion",
     "detect_scale",
     "detect_up",
+    "detect_up_reason",
     "euler_from_matrix",
     "import_bvh",
     "matrix_from_euler",

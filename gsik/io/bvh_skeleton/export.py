@@ -76,13 +76,45 @@ def _joint_channels(sk: Skeleton, j: int, C: np.ndarray, order: str) -> _Channel
     return _Channels(tuple(c.upper() + "rotation" for c in order), (), (), True)
 
 
-def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z") -> BvhClip:
+def _padded(plan: _Channels, order: str) -> _Channels:
+    """``plan`` with three rotation channels: the missing axes added as locked channels (DOF -1, always 0).
+
+    The missing axes go where ``order`` (like ``"XZY"``) puts them when the joint's own axes keep that
+    relative order, else after the joint's own. An identity factor anywhere in the product leaves the
+    rotation unchanged, so every frame's pose is the same; Blender's importer needs 0 or 3 rotations.
+    """
+    if plan.euler or not 0 < len(plan.channels) < 3:
+        return plan
+    own = [c[0] for c in plan.channels]
+    in_order = "".join(a for a in order if a in own) == "".join(own)
+    axes = list(order) if in_order else own + [a for a in order if a not in own]
+    where = {a: k for k, a in enumerate(own)}
+    dofs = tuple(plan.dofs[where[a]] if a in where else -1 for a in axes)
+    signs = tuple(plan.signs[where[a]] if a in where else 1.0 for a in axes)
+    return _Channels(tuple(a + "rotation" for a in axes), dofs, signs, False)
+
+
+def _usual_order(plans: list[_Channels], order: str) -> str:
+    """The skeleton's usual rotation order: the most common one of its exact three-channel joints, else ``order``."""
+    orders = ["".join(c[0] for c in p.channels) for p in plans if not p.euler and len(p.channels) == 3]
+    return max(orders, key=orders.count) if orders else order.upper()
+
+
+def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z", *, pad_rotations: bool = True,
+                  end_sites: bool = False) -> BvhClip:
     """A :class:`~gsik.anim.motion.Motion` as a BVH clip (see the module's conventions).
 
     Args:
         motion: The motion; each frame may pin a different IK root.
         units: ``"cm"`` (default) or ``"m"``: the unit of offsets and positions.
         up: ``"z"`` (default, gsik's world) or ``"y"``.
+        pad_rotations: Write joints with one or two rotations with three
+            rotation channels, the missing ones locked at 0 (default: what
+            Blender's importer needs); ``False`` writes only their own.
+        end_sites: Write a site that is its joint's only child as an
+            ``End Site`` (no extra bone in Blender; the site's name is lost,
+            a re-import calls it ``<joint>_end``); by default every site is a
+            zero-channel ``JOINT`` named after it.
 
     Returns:
         The clip, hierarchy rooted at the skeleton's top joint.
@@ -100,6 +132,10 @@ def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z") -> BvhClip:
         raise BvhError("cannot export a motion with no frames")
     sk = motion.skeleton
     F = motion.n_frames
+    plans = [_joint_channels(sk, j, C, order) for j in range(sk.n_joints)]
+    if pad_rotations:
+        usual = _usual_order(plans, order)
+        plans = [_padded(plan, usual) for plan in plans]
 
     # The top joint's world transform in each frame, from each frame's own root.
     top_frame = int(sk.joint_frame[0])
@@ -140,7 +176,7 @@ def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z") -> BvhClip:
             columns.extend(np.degrees(angles).T)
         else:
             offset = scale * (C @ sk.frame_offset[_first_frame(sk, j)])
-            plan = _joint_channels(sk, j, C, order)
+            plan = plans[j]
             me = add(sk.joint_names[j], parent, offset, plan.channels)
             if plan.euler:
                 R = np.broadcast_to(sk.frame_rotation[_first_frame(sk, j)], (F, 3, 3))
@@ -149,14 +185,19 @@ def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z") -> BvhClip:
                 angles = np.unwrap(euler_from_matrix(C @ R @ C.T, order), axis=0)
                 columns.extend(np.degrees(angles).T)
             else:
-                columns.extend(np.degrees(sign * motion.q[:, d]) for d, sign in zip(plan.dofs, plan.signs))
+                columns.extend(np.degrees(sign * motion.q[:, d]) if d >= 0 else np.zeros(F)
+                               for d, sign in zip(plan.dofs, plan.signs))
         children = [k for k in range(sk.n_joints) if sk.joint_parent[k] == j]
         sites = [s for s in range(len(sk.site_names)) if site_joint[s] == j]
         for k in children:
             emit(k, me)
+        leaf_site = end_sites and not children and len(sites) == 1
         for s in sites:
-            fr = sk.site_frame[s]
-            site = add(sk.site_names[s], me, scale * (C @ sk.frame_offset[fr]))
+            offset = scale * (C @ sk.frame_offset[sk.site_frame[s]])
+            if leaf_site:
+                add("", me, offset, is_end_site=True)
+                continue
+            site = add(sk.site_names[s], me, offset)
             add("", site, (0.0, 0.0, 0.0), is_end_site=True)
         if not children and not sites:
             add("", me, (0.0, 0.0, 0.0), is_end_site=True)
@@ -181,6 +222,7 @@ def pose_to_bvh(
     units: str = "cm",
     up: str = "z",
     frame_time: float = 1.0 / 30.0,
+    **options,
 ) -> BvhClip:
     """One pose as a one-frame BVH clip (see :func:`motion_to_bvh`).
 
@@ -190,7 +232,7 @@ def pose_to_bvh(
         world_from_root: World transform (4, 4) of ``root``; by default the
             skeleton stands where its definition places it.
         root: The frame ``world_from_root`` pins (default ``skeleton.root``).
-        units, up: As for :func:`motion_to_bvh`.
+        units, up, options: As for :func:`motion_to_bvh`.
         frame_time: The clip's frame time [s].
     """
     q = skeleton.validate_q(q)
@@ -198,23 +240,25 @@ def pose_to_bvh(
     if world_from_root is None:
         world_from_root = skeleton.frame_transforms(q)[skeleton.frame_of(root)]
     motion = Motion(skeleton, q[None], (root,), np.asarray(world_from_root, dtype=float)[None], frame_time)
-    return motion_to_bvh(motion, units=units, up=up)
+    return motion_to_bvh(motion, units=units, up=up, **options)
 
 
 def write_motion_bvh(
-    path: str | os.PathLike, motion: Motion, units: str = "cm", up: str = "z", precision: int | None = None
+    path: str | os.PathLike, motion: Motion, units: str = "cm", up: str = "z", precision: int | None = None,
+    **options,
 ) -> None:
     """Export ``motion`` (see :func:`motion_to_bvh`) and write it to ``path`` atomically.
 
     Args:
         precision: Decimals of the numbers; by default 6 for centimetres and
             8 for metres (10 nm either way; angles to 1e-6 degrees or finer).
+        options: :func:`motion_to_bvh`'s keyword options.
 
     Raises:
         BvhError: as :func:`motion_to_bvh`.
         GsikFileError: the file cannot be written.
     """
-    clip = motion_to_bvh(motion, units=units, up=up)
+    clip = motion_to_bvh(motion, units=units, up=up, **options)
     if precision is None:
         precision = 8 if units == "m" else 6
     atomic_write_text(path, format_bvh(clip, precision))

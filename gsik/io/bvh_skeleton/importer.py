@@ -12,7 +12,7 @@ import numpy as np
 from gsik import validate
 from gsik.anim.motion import Motion
 from gsik.errors import BvhError, choices
-from gsik.io.bvh import BvhClip, bvh_local_rotations, bvh_local_translations
+from gsik.io.bvh import BvhClip, bvh_forward_kinematics, bvh_local_rotations, bvh_local_translations
 from gsik.io.bvh_skeleton.conventions import AXIS_INDEX, LIMIT_MODES, UP_AXES, Z_UP_TO_Y_UP, BvhImportWarning
 from gsik.io.names import unique_name
 from gsik.skeleton import JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
@@ -30,6 +30,11 @@ class BvhImport(NamedTuple):
         scale: Metres per file unit used.
         up: The file's up axis used (``"y"`` or ``"z"``).
         warnings: What could not be reproduced exactly, one sentence each.
+        clip: The clip imported.
+        dof_columns: ``(dof name, motion column)`` of every rotation channel:
+            where :func:`~gsik.io.bvh_skeleton.clip_with_motion` writes a
+            solved motion back.
+        up_reason: Why ``up`` was chosen (detected, or as given).
     """
 
     skeleton: Skeleton
@@ -38,6 +43,9 @@ class BvhImport(NamedTuple):
     scale: float
     up: str
     warnings: tuple[str, ...]
+    clip: BvhClip | None = None
+    dof_columns: tuple[tuple[str, int], ...] = ()
+    up_reason: str = ""
 
 
 def _rest_extent(clip: BvhClip) -> np.ndarray:
@@ -60,9 +68,38 @@ def detect_scale(clip: BvhClip) -> float:
 
 
 def detect_up(clip: BvhClip) -> str:
-    """``"y"`` if the rest pose is taller along y than along z, else ``"z"``."""
-    ext = _rest_extent(clip)
-    return "y" if ext[1] > ext[2] else "z"
+    """The clip's up axis, ``"y"`` or ``"z"``, judged over the whole clip (see :func:`detect_up_reason`)."""
+    return detect_up_reason(clip)[0]
+
+
+def detect_up_reason(clip: BvhClip) -> tuple[str, str]:
+    """``(up axis, why)``: the axis along which the body stands over the whole clip.
+
+    The first frame or the rest pose can mislead (a T-pose lying flat, a clip
+    that starts on the floor), so every frame counts: the up axis is the one
+    along which the body is tallest in the median frame. Where y and z are
+    within 10% of each other, gravity decides: the body's lowest point (the
+    feet on the ground) keeps one height along the up axis while it travels
+    along the others. A clip without frames is judged by its rest pose.
+    """
+    if clip.n_frames == 0:
+        ext = _rest_extent(clip)
+        up = "y" if ext[1] > ext[2] else "z"
+        return up, f"{up} up: the rest pose is {ext[1]:.4g} units tall along y, {ext[2]:.4g} along z (no frames)"
+    step = max(1, clip.n_frames // 2000)  # a few thousand frames tell as much as all of them
+    sample = BvhClip(clip.joints, clip.frame_time, clip.motion[::step])
+    p = bvh_forward_kinematics(sample)[1]  # (F, n, 3) file units
+    height = np.median(p.max(axis=1) - p.min(axis=1), axis=0)
+    ground = np.ptp(p.min(axis=1), axis=0)  # how far the lowest point moves along each axis
+    tall = int(np.argmax(height[1:])) + 1
+    other = 3 - tall
+    if height[tall] < 1.1 * height[other] and ground[other] < ground[tall]:
+        tall, other = other, tall
+    up, side = "xyz"[tall], "xyz"[other]
+    why = (f"{up} up: over {clip.n_frames} frames the body is {height[tall]:.4g} units tall along {up} and "
+           f"{height[other]:.4g} along {side} (median frame); its lowest point moves {ground[tall]:.4g} units "
+           f"along {up} (the ground) and {ground[other]:.4g} along {side}")
+    return up, why
 
 
 def _local_names(clip: BvhClip, strip_namespace: bool) -> list[str]:
@@ -90,6 +127,7 @@ def import_bvh(
     up: Literal["auto", "y", "z"] = "auto",
     strip_namespace: bool = False,
     name: str = "bvh",
+    unwrap: bool = True,
 ) -> BvhImport:
     """A BVH clip as a gsik skeleton and motion (see the module's conventions).
 
@@ -104,13 +142,15 @@ def import_bvh(
         up: The file's up axis: ``"y"``, ``"z"`` or ``"auto"`` (:func:`detect_up`).
         strip_namespace: Drop ``"prefix:"`` from joint names.
         name: The skeleton's name.
+        unwrap: Unwrap each rotation channel over the frames (default); ``False``
+            takes the file's angles as they are (limits then stop at a wrap).
 
     Raises:
         BvhError: a bad argument, an unknown effector or root (listing the
             valid names), or names that clash once their namespace is stripped.
     """
-    scale, up = _check_import_args(clip, limits, margin, scale, up)
-    b = _Importer(clip, _local_names(clip, strip_namespace), scale, up)
+    scale, (up, up_reason) = _check_import_args(clip, limits, margin, scale, up)
+    b = _Importer(clip, _local_names(clip, strip_namespace), scale, up, bool(unwrap))
     b.add_joints_and_sites()
     b.set_limits(limits, margin)
     chosen = b.default_effectors() if effectors is None else b.named_effectors(effectors)
@@ -119,11 +159,13 @@ def import_bvh(
         raise BvhError(f"no joint or site {root_name!r} to use as the root; joints: {choices(b.joint_names)}; "
                        f"sites: {choices(s.name for s in b.sites)}")
     sk = build_skeleton(name, b.specs, b.sites, b.segments(), effectors=chosen, root=root_name, source="<bvh>")
-    return BvhImport(sk, b.motion(sk), tuple(chosen), scale, up, tuple(b.messages))
+    return BvhImport(sk, b.motion(sk), tuple(chosen), scale, up, tuple(b.messages), clip,
+                     tuple(b.dof_columns.items()), up_reason)
 
 
-def _check_import_args(clip: BvhClip, limits: str, margin: float, scale: float | None, up: str) -> tuple[float, str]:
-    """``(scale [m per file unit], up axis)``, detected where asked; the other arguments checked."""
+def _check_import_args(clip: BvhClip, limits: str, margin: float, scale: float | None,
+                       up: str) -> tuple[float, tuple[str, str]]:
+    """``(scale [m per file unit], (up axis, why))``, detected where asked; the other arguments checked."""
     if not isinstance(clip, BvhClip):
         raise BvhError(f"import_bvh needs a gsik.io.bvh.BvhClip, got {type(clip).__name__}")
     if limits not in LIMIT_MODES:
@@ -133,10 +175,10 @@ def _check_import_args(clip: BvhClip, limits: str, margin: float, scale: float |
     scale = detect_scale(clip) if scale is None else validate.positive(scale, "scale", BvhError,
                                                                        "metres per file unit")
     if up == "auto":
-        up = detect_up(clip)
-    elif up not in UP_AXES:
+        return scale, detect_up_reason(clip)
+    if up not in UP_AXES:
         raise BvhError(f"unknown up axis {up!r}; expected 'auto' or one of {choices(UP_AXES)}")
-    return scale, up
+    return scale, (up, "as given")
 
 
 class _Importer:
@@ -151,8 +193,8 @@ class _Importer:
         messages: What cannot be reproduced exactly.
     """
 
-    def __init__(self, clip: BvhClip, names: list[str], scale: float, up: str) -> None:
-        self.clip, self.names, self.scale = clip, names, float(scale)
+    def __init__(self, clip: BvhClip, names: list[str], scale: float, up: str, unwrap: bool) -> None:
+        self.clip, self.names, self.scale, self.unwrap = clip, names, float(scale), unwrap
         self.M = Z_UP_TO_Y_UP.T if up == "y" else np.eye(3)  # file -> gsik world
         self.local_t = bvh_local_translations(clip)
         self.children: list[list[int]] = [[] for _ in clip.joints]
@@ -231,13 +273,18 @@ class _Importer:
             self.messages.append(f"joint {joint.name!r}: its position channels change over the clip; gsik joints "
                                  f"do not slide, so the first frame's offset is used")
 
+    def angles(self, dof: str) -> np.ndarray:
+        """(F,) the clip's angle of ``dof`` [rad], unwrapped: continuous, without 360-degree jumps."""
+        angles = np.radians(self.clip.motion[:, self.dof_columns[dof]])
+        return np.unwrap(angles) if self.unwrap else angles
+
     # --- limits --------------------------------------------------------------------------
     def set_limits(self, limits: str, margin: float) -> None:
         """Limits from the motion: ``"wide"`` [-pi, pi] widened to the clip, or the clip's range + ``margin``."""
         for n, spec in enumerate(self.specs):
             rots = []
             for r in spec.rotations:
-                v = np.radians(self.clip.motion[:, self.dof_columns[f"{spec.name}.{r.label}"]])
+                v = self.angles(f"{spec.name}.{r.label}")
                 lo, hi = _limits(v, limits, margin)
                 rots.append(RotationSpec(r.axis, lo, hi, min(max(0.0, lo), hi), r.label))
             self.specs[n] = JointSpec(spec.name, spec.parent, spec.offset, tuple(rots), spec.orientation)
@@ -286,8 +333,8 @@ class _Importer:
     def motion(self, sk: Skeleton) -> Motion:
         """The clip's angles on ``sk``, the top joint pinned per frame."""
         q = np.zeros((self.clip.n_frames, sk.n_dofs))
-        for dof, col in self.dof_columns.items():
-            q[:, sk.dof_index(dof)] = np.radians(self.clip.motion[:, col])
+        for dof in self.dof_columns:
+            q[:, sk.dof_index(dof)] = self.angles(dof)
         return Motion(sk, q, (self.names[0],) * self.clip.n_frames, self.W, self.clip.frame_time)
 
 
@@ -295,7 +342,10 @@ def _limits(v: np.ndarray, limits: str, margin: float) -> tuple[float, float]:
     """``(lower, upper)`` [rad] of one DOF whose clip values are ``v`` (F,) [rad]."""
     if limits == "from_motion" and v.size:
         return float(v.min()) - margin, float(v.max()) + margin
-    return min(-math.pi, float(v.min(initial=0.0))), max(math.pi, float(v.max(initial=0.0)))
+    lo, hi = float(v.min(initial=0.0)), float(v.max(initial=0.0))
+    if lo < -math.pi or hi > math.pi:  # past half a turn (an unwrapped spin): half a turn of room beyond the clip
+        return lo - math.pi, hi + math.pi
+    return -math.pi, math.pi
 
 
 def skeleton_from_bvh(
