@@ -290,7 +290,7 @@ def _meets(solver: Solver, targets: dict) -> bool:
         if np.linalg.norm(p[i] - t.position) > s.position_tolerance:
             return False
         if t.uses_orientation:
-            cos = 0.5 * (np.trace(R[i].T @ t.orientation) - 1.0)
+            cos = 0.5 * (np.trace(R[i].T @ t.rotation) - 1.0)
             if np.arccos(np.clip(cos, -1.0, 1.0)) > s.orientation_tolerance:
                 return False
     return True
