@@ -7,7 +7,9 @@ Per frame:
    long as the skeleton's.
 2. The pelvis, the IK root, is placed from the clip: its origin where the
    clip's hip joints put it, facing where the hips and the spine face
-   (right = right hip minus left hip, up = towards the neck).
+   (right = right hip minus left hip, up = towards the first mapped spine
+   joint), turned by the rig's constant lean (the mean turn from that frame
+   to the one towards the neck over the clip).
 3. Targets with the skeleton's proportions: each mapped frame hangs off its
    nearest mapped ancestor along the clip's direction between the two joints,
    at the skeleton's own distance (a rig with longer arms does not ask for
@@ -55,6 +57,8 @@ PRIORITIES = {
 REQUIRED = ("left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle", "neck")
 #: Prioritised steps per frame at most (warm-started: a few suffice at 30 fps).
 STEPS_PER_FRAME = 6
+#: Steps for the first frame, which starts from the rest pose.
+FIRST_FRAME_STEPS = 60
 #: Weight of the rest posture below every target [1/rad^2]: a tie-breaker only.
 REST_POSTURE_WEIGHT = 0.01
 
@@ -175,6 +179,16 @@ class Retargeter:
         self.mapping = {f: j for f, j in found.items() if self._anchor[f] is None or np.linalg.norm(
             rest_clip[index[j]] - rest_clip[index[found[self._anchor[f]]]]) > 1e-6 / self.scale}
         self._columns = np.array([index[j] for j in self.mapping.values()])
+        # The pelvis faces where the hips and the spine's first mapped joint (rigid with the hips in most rigs)
+        # face, turned by the rig's constant lean: the mean turn from that frame to the hips-and-neck frame over
+        # the clip (the waist is straight on average). A rig's rest pose cannot tell: many are not standing.
+        self._spine = "waist" if "waist" in self.mapping else "neck"
+        at = clip_world_positions(clip, self.up)
+        hips = [at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip")]
+        lean = np.transpose(pelvis_frames(*hips, at[:, index[self.mapping[self._spine]]]), (0, 2, 1)) @ pelvis_frames(
+            *hips, at[:, index[self.mapping["neck"]]])
+        U, _, Vt = np.linalg.svd(lean.mean(axis=0))
+        self._upright = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
         p = rest[1]
         pelvis = skeleton.frame_of("pelvis")
         mid = 0.5 * (p[skeleton.frame_of("left_hip")] + p[skeleton.frame_of("right_hip")])
@@ -194,7 +208,7 @@ class Retargeter:
         """Per frame: the pelvis's world transform (n, 4, 4) and the mapped frames' targets (n, n_mapped, 3) [m]."""
         p = clip_world_positions(clip, self.up)[:, self._columns] * self.scale
         col = {f: k for k, f in enumerate(self.mapping)}
-        R = pelvis_frames(p[:, col["left_hip"]], p[:, col["right_hip"]], p[:, col["neck"]])
+        R = pelvis_frames(p[:, col["left_hip"]], p[:, col["right_hip"]], p[:, col[self._spine]]) @ self._upright
         W = np.broadcast_to(np.eye(4), (len(p), 4, 4)).copy()
         W[:, :3, :3] = R
         W[:, :3, 3] = 0.5 * (p[:, col["left_hip"]] + p[:, col["right_hip"]]) + R @ self._pelvis_from_mid
@@ -228,7 +242,7 @@ class Retargeter:
         for i in range(n):
             s.set_world_from_root(W[i])
             s.set_targets({f: Target(points[i, k], position_only=True, priority=PRIORITIES[f]) for k, f in tracked})
-            for _ in range(STEPS_PER_FRAME):
+            for _ in range(STEPS_PER_FRAME if i else FIRST_FRAME_STEPS):
                 if s.step().step_norm < 1e-5:
                     break
             Q[i] = s.q

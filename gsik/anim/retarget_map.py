@@ -37,7 +37,7 @@ CENTRE_ALIASES = {
 SIDE_ALIASES = {
     "hip": ("upleg", "thigh", "upperleg", "femur", "hip"),
     "knee": ("leg", "shin", "knee", "calf", "lowerleg", "tibia", "shank"),
-    "ankle": ("foot", "ankle"),
+    "ankle": ("ankle", "foot"),
     "toe": ("toebase", "toe", "toes", "ball", "footend"),
     "shoulder": ("arm", "upperarm", "humerus"),
     "elbow": ("forearm", "elbow", "lowerarm", "radius"),
