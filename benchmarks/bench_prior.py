@@ -19,7 +19,8 @@ frame), the largest target error, and the median step time
 (``step()`` from the rest pose towards the targets) with its ratio to the rest
 posture's.
 
-Run: ``python benchmarks/bench_prior.py [--clip PATH] [--folds 5] [--stride 20]``.
+Run: ``python benchmarks/bench_prior.py [--clip PATH] [--folds 5] [--stride 20] [--cache motion.npz]``
+(retargeting the whole clip takes minutes: ``--cache`` keeps it for the next run).
 Nothing here is asserted by the tests.
 """
 
@@ -48,6 +49,8 @@ POSTURES = ("none", "rest", "prior")
 JOINTS = ("waist", "neck", "atlas", "left_shoulder", "left_elbow", "right_shoulder", "right_elbow",
           "left_hip", "left_knee", "left_ankle", "right_hip", "right_knee", "right_ankle")
 STEP_SAMPLES = 40
+#: Further attempts of solve() (the default 20 makes a run take hours on the prioritised path); the same for all.
+RESTARTS = 2
 
 
 def _set_posture(solver: Solver, kind: str, prior) -> None:
@@ -70,7 +73,7 @@ def _case(sk, Q_test, W_test, prior, names, kind) -> dict:
         foot = sk.frame_of("right_foot")
         T = np.eye(4)
         T[:3, :3], T[:3, 3] = R[foot], p[foot]
-        solver = Solver(sk, world_from_root=T)
+        solver = Solver(sk, world_from_root=T, restarts=RESTARTS)
         _set_posture(solver, kind, prior)
         targets = {}
         for n in names:
@@ -96,6 +99,7 @@ def main() -> None:
     ap.add_argument("--folds", type=int, default=5)
     ap.add_argument("--stride", type=int, default=20, help="every n-th held-out frame is a test pose")
     ap.add_argument("--frames", type=int, default=0, help="use only the clip's first n frames (0: all)")
+    ap.add_argument("--cache", type=Path, help="keep the retargeted motion in this .npz (read it if it exists)")
     args = ap.parse_args()
     sk = load_skeleton("biped")
     clip = read_bvh(args.clip)
@@ -104,10 +108,7 @@ def main() -> None:
         clip = BvhClip(clip.joints, clip.frame_time, clip.motion[:args.frames])
     print(f"## Pose prior: {args.clip.name}, {clip.n_frames} frames, {args.folds} time folds, every "
           f"{args.stride}th held-out frame; load {os.getloadavg()[0]:.2f}\n")
-    t = time.perf_counter()
-    motion = Retargeter(sk, clip).retarget(clip).motion
-    print(f"retargeted in {time.perf_counter() - t:.1f} s\n")
-    Q, W = np.asarray(motion.q), np.asarray(motion.world_from_root)
+    Q, W = _retargeted(sk, clip, args.cache)
     warm = Solver(sk)
     warm.set_posture(None, 1.0)
     warm.solve({"left_hand": Target([0.2, 0.3, 1.0])})  # compile before timing
@@ -119,6 +120,21 @@ def main() -> None:
             for k in POSTURES:
                 results[s, k].append(_case(sk, Q[test], W[test], prior, names, k))
     _print(results)
+
+
+def _retargeted(sk, clip, cache: Path | None) -> tuple[np.ndarray, np.ndarray]:
+    """The clip's poses on the biped (n, n_dofs) [rad] and the pelvis's transforms (n, 4, 4)."""
+    if cache is not None and cache.exists():
+        with np.load(cache, allow_pickle=False) as z:
+            if len(z["q"]) == clip.n_frames:
+                print(f"retargeted motion read from {cache}\n")
+                return z["q"], z["world_from_root"]
+    t = time.perf_counter()
+    motion = Retargeter(sk, clip).retarget(clip).motion
+    print(f"retargeted in {time.perf_counter() - t:.1f} s\n")
+    if cache is not None:
+        np.savez(cache, q=motion.q, world_from_root=motion.world_from_root)
+    return np.asarray(motion.q), np.asarray(motion.world_from_root)
 
 
 def _print(results) -> None:

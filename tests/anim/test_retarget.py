@@ -102,3 +102,23 @@ def test_a_real_clip_maps_every_biped_frame_and_keeps_its_joints():
         assert table[frame][3] < 1.0, table[frame]  # p95 [mm]
     for frame in ("left_knee", "right_knee", "left_elbow", "right_elbow"):
         assert table[frame][3] < 40.0, table[frame]
+
+
+def test_gsik_retarget_writes_a_biped_clip_and_reports_every_mapped_joint(tmp_path):
+    import io
+
+    from gsik.cli import main
+    from gsik.io.bvh import write_bvh
+
+    clip, _ = _biped_clip(10)
+    src, out, mapping = tmp_path / "clip.bvh", tmp_path / "biped.bvh", tmp_path / "map.yaml"
+    write_bvh(src, clip)
+    mapping.write_text("format: 1\nmap:\n" + "".join(f"  {k}: {v}\n" for k, v in BIPED_EXTRA.items()))
+    text = io.StringIO()
+    assert main(["retarget", str(src), "--map", str(mapping), "--out", str(out)], out=text) == 0, text.getvalue()
+    report = text.getvalue()
+    assert "left_knee" in report and "biped frames not mapped: none" in report and "clip joints not used:" in report
+    written = read_bvh(out)
+    assert written.n_frames == 10 and {"hips", "left_knee", "right_elbow"} <= {j.name for j in written.joints}
+    text = io.StringIO()
+    assert main(["retarget", str(src), "--out", str(tmp_path / "x.txt")], out=text) == 2
