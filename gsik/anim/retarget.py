@@ -143,6 +143,36 @@ def best_rotations(rest: np.ndarray, now: np.ndarray) -> np.ndarray:
     return np.transpose(Vt, (0, 2, 1)) @ D @ np.transpose(U, (0, 2, 1))
 
 
+def rig_lean(left_hip: np.ndarray, right_hip: np.ndarray, spine: np.ndarray, neck: np.ndarray) -> np.ndarray:
+    """The rig's constant turn (3, 3) from the pelvis frame through its first spine joint to the true pelvis.
+
+    The first spine joint is rigid with the hips in most rigs, but not straight
+    above them; the turn is the mean, over the clip's frames (points (n, 3)),
+    from that frame to the one through the neck: the waist is straight on
+    average. (A rig's rest pose cannot tell: many are not standing.)
+    """
+    lean = np.transpose(pelvis_frames(left_hip, right_hip, spine), (0, 2, 1)) @ pelvis_frames(left_hip, right_hip,
+                                                                                             neck)
+    U, _, Vt = np.linalg.svd(lean.mean(axis=0))
+    return U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
+
+
+def _layout(skeleton: Skeleton, mapping: Mapping[str, str], anchor: Mapping[str, str | None], rest) -> tuple:
+    """From the skeleton's rest frames ``rest`` (R, p): each mapped frame's position in the pelvis's frame,
+    the pelvis origin from the hip joints' midpoint (pelvis frame), the frames grouped by anchor (tree
+    order), and each anchored frame's rest offset from its anchor (world) [m]."""
+    R, p = rest
+    pelvis = skeleton.frame_of("pelvis")
+    mid = 0.5 * (p[skeleton.frame_of("left_hip")] + p[skeleton.frame_of("right_hip")])
+    local = {f: R[pelvis].T @ (p[skeleton.frame_of(f)] - p[pelvis]) for f in mapping}
+    groups: dict[str, list[str]] = {}
+    for f in mapping:
+        if anchor[f] is not None:
+            groups.setdefault(anchor[f], []).append(f)
+    offset = {f: p[skeleton.frame_of(f)] - p[skeleton.frame_of(a)] for a, fs in groups.items() for f in fs}
+    return local, R[pelvis].T @ (p[pelvis] - mid), groups, offset
+
+
 class Retargeter:
     """Retargets clips of one rig onto one skeleton (reuse it for every clip of that rig).
 
@@ -179,28 +209,12 @@ class Retargeter:
         self.mapping = {f: j for f, j in found.items() if self._anchor[f] is None or np.linalg.norm(
             rest_clip[index[j]] - rest_clip[index[found[self._anchor[f]]]]) > 1e-6 / self.scale}
         self._columns = np.array([index[j] for j in self.mapping.values()])
-        # The pelvis faces where the hips and the spine's first mapped joint (rigid with the hips in most rigs)
-        # face, turned by the rig's constant lean: the mean turn from that frame to the hips-and-neck frame over
-        # the clip (the waist is straight on average). A rig's rest pose cannot tell: many are not standing.
         self._spine = "waist" if "waist" in self.mapping else "neck"
         at = clip_world_positions(clip, self.up)
-        hips = [at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip")]
-        lean = np.transpose(pelvis_frames(*hips, at[:, index[self.mapping[self._spine]]]), (0, 2, 1)) @ pelvis_frames(
-            *hips, at[:, index[self.mapping["neck"]]])
-        U, _, Vt = np.linalg.svd(lean.mean(axis=0))
-        self._upright = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
-        p = rest[1]
-        pelvis = skeleton.frame_of("pelvis")
-        mid = 0.5 * (p[skeleton.frame_of("left_hip")] + p[skeleton.frame_of("right_hip")])
-        #: Rest positions [m] in the pelvis's frame, and offsets from each frame's anchor (world at rest).
-        self._local = {f: rest[0][pelvis].T @ (p[skeleton.frame_of(f)] - p[pelvis]) for f in self.mapping}
-        self._pelvis_from_mid = rest[0][pelvis].T @ (p[pelvis] - mid)
-        self._groups: dict[str, list[str]] = {}
-        for f in self.mapping:
-            if self._anchor[f] is not None:
-                self._groups.setdefault(self._anchor[f], []).append(f)
-        self._offset = {f: p[skeleton.frame_of(f)] - p[skeleton.frame_of(a)] for a, fs in self._groups.items()
-                        for f in fs}
+        self._upright = rig_lean(*(at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip", self._spine,
+                                                                            "neck")))
+        self._local, self._pelvis_from_mid, self._groups, self._offset = _layout(skeleton, self.mapping,
+                                                                                 self._anchor, rest)
         self.unmapped_frames = tuple(f for f in targetable if f not in self.mapping)
         self.unmapped_clip = tuple(n for n in names if n not in set(self.mapping.values()))
 
