@@ -82,8 +82,8 @@ def _case(sk, Q_test, W_test, prior, names, kind) -> dict:
             Tn = np.eye(4)
             Tn[:3, :3], Tn[:3, 3] = R[sk.frame_of(n)], p[sk.frame_of(n)]
             targets[n] = Target.from_transform(Tn)
-        if i < STEP_SAMPLES:
-            solver.set_targets(targets)
+        if i < STEP_SAMPLES:  # a dragging step: the second one (the first builds the prioritised controller)
+            solver.step(targets)
             t = time.perf_counter()
             solver.step()
             step_times.append(time.perf_counter() - t)
@@ -93,6 +93,11 @@ def _case(sk, Q_test, W_test, prior, names, kind) -> dict:
         target_err.append(max(r.errors()[n][0] for n in names))
     e = np.array(joint_err) * 1000.0
     return dict(all=e, interior=e[:, interior], target=np.array(target_err) * 1000.0, step=np.array(step_times))
+
+
+def _met(m: dict) -> str:
+    """Share of test poses whose targets were all met within 1 mm."""
+    return f"{100 * np.mean(m['target'] < 1.0):.0f}%"
 
 
 def main() -> None:
@@ -140,9 +145,9 @@ def _retargeted(sk, clip, cache: Path | None) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _print(results) -> None:
-    print("| targets | posture | joints mean / p95 [mm] | interior mean / p95 [mm] | largest target error [mm] "
-          "| step time median [ms] | step time / rest posture's |")
-    print("|---|---|---|---|---|---|---|")
+    print("| targets | posture | joints mean / p95 [mm] | interior mean / p95 [mm] | targets met (1 mm) "
+          "| largest target error [mm] | step time median [ms] | step time / rest posture's |")
+    print("|---|---|---|---|---|---|---|---|")
     for s in TARGET_SETS:
         merged = {k: {f: np.concatenate([r[f].ravel() for r in results[s, k]]) for f in results[s, k][0]}
                   for k in POSTURES}
@@ -151,7 +156,7 @@ def _print(results) -> None:
             m = merged[k]
             print(f"| {s} | {k} | {m['all'].mean():.0f} / {np.percentile(m['all'], 95):.0f} "
                   f"| {m['interior'].mean():.0f} / {np.percentile(m['interior'], 95):.0f} "
-                  f"| {m['target'].max():.3f} | {1000 * np.median(m['step']):.2f} "
+                  f"| {_met(m)} | {m['target'].max():.3f} | {1000 * np.median(m['step']):.2f} "
                   f"| {np.median(m['step']) / rest_step:.2f} |")
     print()
 
