@@ -29,7 +29,7 @@ from gsik.errors import SolverError
 from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
     support_polygon
 from gsik.kinematics import kinematic_model, topology
-from gsik.priority import Level, posture_level, prioritized_step
+from gsik.priority import Level, factor_level, posture_factor, prioritized_step
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
@@ -119,6 +119,8 @@ class Controller:
         if balance is not None and not balance.feet:
             balance = None  # no foot on the ground: nothing to stand on
         self._posture = posture
+        # The posture's precision factored once (a learned prior's is a full matrix): each step only multiplies.
+        self._posture_factor = None if posture is None else posture_factor(posture.precision)
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
         self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
@@ -240,7 +242,7 @@ class Controller:
             sel = (rows == k) & (weights > 0.0)
             out.append(Level(self._J[sel], self._e[sel], weights[sel]))
         if self._posture is not None:
-            out.append(posture_level(q, self._posture.reference, self._posture.precision))
+            out.append(factor_level(q, self._posture.reference, self._posture_factor))
         return out
 
     def _balance_level_rows(self, R, p) -> Level:

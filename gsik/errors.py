@@ -56,6 +56,14 @@ class ScenarioError(GsikError, ValueError):
     """An unknown scenario, a skeleton a scenario does not fit, or bad run settings."""
 
 
+class RetargetError(GsikError, ValueError):
+    """A clip cannot be retargeted: a bad mapping, or joints the retargeting needs are not mapped."""
+
+
+class PriorError(GsikError, ValueError):
+    """A pose prior file or pose-prior data is invalid, or does not fit the skeleton."""
+
+
 class GsikFileError(GsikError, OSError):
     """A file could not be read or written (permission, missing folder, full disk).
 

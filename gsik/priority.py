@@ -57,14 +57,22 @@ def posture_level(q: np.ndarray, reference: np.ndarray, precision: np.ndarray) -
     Returns:
         A :class:`Level` with ``jacobian = L`` where ``P = L^T L``.
     """
+    return factor_level(q, reference, posture_factor(precision))
+
+
+def posture_factor(precision: np.ndarray) -> np.ndarray:
+    """``L`` (n, n) with ``P = L^T L``, for per-DOF weights (n,) or a PSD matrix (n, n); factor once, step often."""
     P = np.asarray(precision, dtype=float)
     if P.ndim == 1:
-        L = np.diag(np.sqrt(P))
-    else:
-        vals, vecs = np.linalg.eigh(0.5 * (P + P.T))
-        L = np.sqrt(np.clip(vals, 0.0, None))[:, None] * vecs.T
+        return np.diag(np.sqrt(P))
+    vals, vecs = np.linalg.eigh(0.5 * (P + P.T))
+    return np.sqrt(np.clip(vals, 0.0, None))[:, None] * vecs.T
+
+
+def factor_level(q: np.ndarray, reference: np.ndarray, factor: np.ndarray) -> Level:
+    """:func:`posture_level` from a precision already factored by :func:`posture_factor`."""
     g = np.asarray(reference, dtype=float) - np.asarray(q, dtype=float)
-    return Level(L, L @ g, np.ones(L.shape[0]))
+    return Level(factor, factor @ g, np.ones(factor.shape[0]))
 
 
 def prioritized_step(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray,

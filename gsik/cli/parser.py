@@ -13,6 +13,7 @@ from gsik.cli.commands import cmd_bench, cmd_scenarios, cmd_solve, cmd_walk
 from gsik.cli.track import cmd_track
 from gsik.cli.common import PROG
 from gsik.cli.info import cmd_info
+from gsik.cli.prior import add_commands as add_prior_commands
 from gsik.errors import GsikError, show_value
 
 
@@ -170,6 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write angles in [-180, 180) (default: continuous, as tracked)")
     _add_common(p)
     p.set_defaults(run=cmd_track)
+
+    add_prior_commands(add, _add_common)
 
     p = add("bench", "the solver benchmarks (paper Table 1, tracking, stability, reach)",
             "Run the solver benchmarks of benchmarks/bench_solver.py and print them as Markdown.")

@@ -1,0 +1,290 @@
+"""Retarget a BVH clip onto a gsik skeleton (the biped): its joints track the clip's, by priority.
+
+Per frame:
+
+1. The clip's world positions (its own forward kinematics), turned to gsik's
+   z-up world and scaled so the clip's legs (hip to ankle, rest pose) are as
+   long as the skeleton's.
+2. The pelvis, the IK root, is placed from the clip: its origin where the
+   clip's hip joints put it, facing where the hips and the spine face
+   (right = right hip minus left hip, up = towards the first mapped spine
+   joint), turned by the rig's constant lean (the mean turn from that frame
+   to the one towards the neck over the clip).
+3. Targets with the skeleton's proportions: each mapped frame hangs off its
+   nearest mapped ancestor along the clip's direction between the two joints,
+   at the skeleton's own distance (a rig with longer arms does not ask for
+   stretched ones). Frames sharing an ancestor (neck and shoulders on the
+   waist) turn together: the rotation that best aligns their rest directions
+   with the clip's (Kabsch).
+4. The mapped frames track those points as position targets in strict
+   priority (:data:`PRIORITIES`): ankles, wrists and head first; knees,
+   elbows, toes, the head's top and the neck next (a foot's and the head's
+   orientation are carried by two points each: rigs disagree on what their
+   zero rotation means, points do not); shoulders last. A few prioritised
+   steps from the previous frame's pose (warm start), with the rest pose as a
+   light posture below everything, so directions no target fixes (a straight
+   arm's twist) stay natural.
+
+Biped frames nothing maps to and clip joints that drive nothing are
+reported; so is every mapped frame's error per clip frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from gsik.anim.motion import Motion
+from gsik.anim.retarget_map import resolve_mapping
+from gsik.errors import RetargetError, choices
+from gsik.io.bvh import BvhClip, bvh_forward_kinematics
+from gsik.io.bvh_skeleton import Z_UP_TO_Y_UP, detect_up
+from gsik.kinematics import world_frames
+from gsik.skeleton import Skeleton
+from gsik.solver import Solver
+from gsik.targets import Target
+
+#: Priority level of each skeleton frame's position target (0 is met first).
+PRIORITIES = {
+    "left_ankle": 0, "right_ankle": 0, "left_hand": 0, "right_hand": 0, "atlas": 0,
+    "left_knee": 1, "right_knee": 1, "left_elbow": 1, "right_elbow": 1,
+    "left_toe": 1, "right_toe": 1, "head_top": 1, "neck": 1,
+    "left_shoulder": 2, "right_shoulder": 2, "waist": 2, "left_hip": 2, "right_hip": 2,
+}
+#: Frames the retargeting cannot do without: the pelvis's placement and the leg length need them.
+REQUIRED = ("left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle", "neck")
+#: Prioritised steps per frame at most (warm-started: a few suffice at 30 fps).
+STEPS_PER_FRAME = 6
+#: Steps for the first frame, which starts from the rest pose.
+FIRST_FRAME_STEPS = 60
+#: Weight of the rest posture below every target [1/rad^2]: a tie-breaker only.
+REST_POSTURE_WEIGHT = 0.01
+
+
+@dataclass(frozen=True, eq=False)
+class Retargeted:
+    """A clip retargeted onto a skeleton.
+
+    Attributes:
+        motion: The skeleton's motion (IK root ``pelvis`` in every frame).
+        mapping: Skeleton frame -> clip joint used.
+        unmapped_frames: Skeleton frames nothing in the clip drives.
+        unmapped_clip: Clip joints (End Sites included) that drive nothing.
+        errors: (n_frames, n_mapped) distance [m] of each mapped frame from its
+            target after the solve, columns in ``mapping``'s order.
+        scale: Metres of the skeleton per unit of the clip file.
+        up: The clip's up axis (``"y"`` or ``"z"``).
+    """
+
+    motion: Motion
+    mapping: dict[str, str]
+    unmapped_frames: tuple[str, ...]
+    unmapped_clip: tuple[str, ...]
+    errors: np.ndarray
+    scale: float
+    up: str
+
+    def error_table(self) -> list[tuple[str, str, float, float, float]]:
+        """Per mapped frame: ``(frame, clip joint, mean, p95, max)`` errors [mm]."""
+        e = self.errors * 1000.0
+        return [(f, j, float(e[:, k].mean()), float(np.percentile(e[:, k], 95)), float(e[:, k].max()))
+                for k, (f, j) in enumerate(self.mapping.items())]
+
+
+def clip_world_positions(clip: BvhClip, up: str) -> np.ndarray:
+    """The clip's joint positions (n_frames, n_joints, 3) in gsik's z-up world, in file units."""
+    p = bvh_forward_kinematics(clip)[1]
+    return p @ Z_UP_TO_Y_UP if up == "y" else p  # row vectors: the export's turn inverted
+
+
+def _rest_positions(clip: BvhClip) -> np.ndarray:
+    """(n_joints, 3) rest-pose positions in file units (offsets summed down the tree)."""
+    pos = np.zeros((clip.n_joints, 3))
+    for j, joint in enumerate(clip.joints):
+        if joint.parent >= 0:
+            pos[j] = pos[joint.parent] + joint.offset
+    return pos
+
+
+def _leg_length(points: Callable[[str], np.ndarray]) -> float:
+    """Mean of both legs' hip-knee-ankle lengths, from a name -> position lookup."""
+    return 0.5 * sum(np.linalg.norm(points(f"{s}_hip") - points(f"{s}_knee"))
+                     + np.linalg.norm(points(f"{s}_knee") - points(f"{s}_ankle")) for s in ("left", "right"))
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+
+
+def pelvis_frames(left_hip: np.ndarray, right_hip: np.ndarray, neck: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) pelvis orientations from (n, 3) points: x left hip to right hip, z towards the neck, y forward."""
+    x = _unit(right_hip - left_hip)
+    z = neck - 0.5 * (left_hip + right_hip)
+    z = _unit(z - np.sum(z * x, axis=-1, keepdims=True) * x)
+    return np.stack([x, np.cross(z, x), z], axis=-1)
+
+
+def best_rotations(rest: np.ndarray, now: np.ndarray) -> np.ndarray:
+    """Rotations (n, 3, 3) best turning directions ``rest`` (m, 3) onto ``now`` (n, m, 3) (Kabsch, no reflection)."""
+    if rest.shape[0] == 1:  # one direction: the shortest turn
+        a, b = _unit(rest[0]), _unit(now[:, 0])
+        v, c = np.cross(a, b), np.sum(a * b, axis=-1)
+        K = np.zeros((len(b), 3, 3))
+        K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+        K -= np.transpose(K, (0, 2, 1))
+        return np.eye(3) + K + K @ K / np.maximum(1.0 + c, 1e-9)[:, None, None]
+    H = np.einsum("mi,nmj->nij", _unit(rest), _unit(now))
+    U, _, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(np.transpose(Vt, (0, 2, 1)) @ np.transpose(U, (0, 2, 1))))
+    D = np.broadcast_to(np.eye(3), H.shape).copy()
+    D[:, 2, 2] = d
+    return np.transpose(Vt, (0, 2, 1)) @ D @ np.transpose(U, (0, 2, 1))
+
+
+def rig_lean(left_hip: np.ndarray, right_hip: np.ndarray, spine: np.ndarray, neck: np.ndarray) -> np.ndarray:
+    """The rig's constant turn (3, 3) from the pelvis frame through its first spine joint to the true pelvis.
+
+    The first spine joint is rigid with the hips in most rigs, but not straight
+    above them; the turn is the mean, over the clip's frames (points (n, 3)),
+    from that frame to the one through the neck: the waist is straight on
+    average. (A rig's rest pose cannot tell: many are not standing.)
+    """
+    lean = np.transpose(pelvis_frames(left_hip, right_hip, spine), (0, 2, 1)) @ pelvis_frames(left_hip, right_hip,
+                                                                                             neck)
+    U, _, Vt = np.linalg.svd(lean.mean(axis=0))
+    return U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
+
+
+def _layout(skeleton: Skeleton, mapping: Mapping[str, str], anchor: Mapping[str, str | None], rest) -> tuple:
+    """From the skeleton's rest frames ``rest`` (R, p): each mapped frame's position in the pelvis's frame,
+    the pelvis origin from the hip joints' midpoint (pelvis frame), the frames grouped by anchor (tree
+    order), and each anchored frame's rest offset from its anchor (world) [m]."""
+    R, p = rest
+    pelvis = skeleton.frame_of("pelvis")
+    mid = 0.5 * (p[skeleton.frame_of("left_hip")] + p[skeleton.frame_of("right_hip")])
+    local = {f: R[pelvis].T @ (p[skeleton.frame_of(f)] - p[pelvis]) for f in mapping}
+    groups: dict[str, list[str]] = {}
+    for f in mapping:
+        if anchor[f] is not None:
+            groups.setdefault(anchor[f], []).append(f)
+    offset = {f: p[skeleton.frame_of(f)] - p[skeleton.frame_of(a)] for a, fs in groups.items() for f in fs}
+    return local, R[pelvis].T @ (p[pelvis] - mid), groups, offset
+
+
+class Retargeter:
+    """Retargets clips of one rig onto one skeleton (reuse it for every clip of that rig).
+
+    Args:
+        skeleton: The target skeleton (the biped): a ``pelvis`` site and the :data:`REQUIRED` frames.
+        clip: A clip of the source rig; its hierarchy and rest pose fix the mapping and the scale.
+        mapping: Skeleton frame -> clip joint entries overriding the name heuristics
+            (:mod:`gsik.anim.retarget_map`).
+        up: The clip's up axis, ``"y"`` or ``"z"``; default detected over the clip.
+
+    Raises:
+        RetargetError: a bad mapping entry, or a :data:`REQUIRED` frame left unmapped.
+    """
+
+    def __init__(self, skeleton: Skeleton, clip: BvhClip, mapping: Mapping[str, str] | None = None,
+                 up: str | None = None):
+        names = [j.name for j in clip.joints]
+        targetable = sorted((f for f in skeleton.target_names if f in PRIORITIES or f == "pelvis"),
+                            key=skeleton.frame_of)  # tree order: an anchor before what hangs off it
+        found = resolve_mapping(names, targetable, mapping)
+        missing = [f for f in REQUIRED if f not in found]
+        if missing:
+            raise RetargetError(f"cannot retarget: no clip joint maps to {choices(missing)} (clip joints: "
+                                f"{choices(names)}); name them in a mapping file")
+        self.skeleton = skeleton
+        self.up = detect_up(clip) if up is None else up
+        index = {n: k for k, n in enumerate(names)}
+        rest_clip = _rest_positions(clip)
+        rest = world_frames(skeleton, skeleton.rest, np.eye(4), skeleton.root)
+        self.scale = float(_leg_length(lambda f: rest[1][skeleton.frame_of(f)])
+                           / _leg_length(lambda f: rest_clip[index[found[f]]]))
+        self._anchor = _anchors(skeleton, [f for f in targetable if f in found])
+        # A joint at its anchor's place in the clip (a zero End Site) gives no direction: not mapped.
+        self.mapping = {f: j for f, j in found.items() if self._anchor[f] is None or np.linalg.norm(
+            rest_clip[index[j]] - rest_clip[index[found[self._anchor[f]]]]) > 1e-6 / self.scale}
+        self._columns = np.array([index[j] for j in self.mapping.values()])
+        self._spine = "waist" if "waist" in self.mapping else "neck"
+        at = clip_world_positions(clip, self.up)
+        self._upright = rig_lean(*(at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip", self._spine,
+                                                                            "neck")))
+        self._local, self._pelvis_from_mid, self._groups, self._offset = _layout(skeleton, self.mapping,
+                                                                                 self._anchor, rest)
+        self.unmapped_frames = tuple(f for f in targetable if f not in self.mapping)
+        self.unmapped_clip = tuple(n for n in names if n not in set(self.mapping.values()))
+
+    def world_targets(self, clip: BvhClip) -> tuple[np.ndarray, np.ndarray]:
+        """Per frame: the pelvis's world transform (n, 4, 4) and the mapped frames' targets (n, n_mapped, 3) [m]."""
+        p = clip_world_positions(clip, self.up)[:, self._columns] * self.scale
+        col = {f: k for k, f in enumerate(self.mapping)}
+        R = pelvis_frames(p[:, col["left_hip"]], p[:, col["right_hip"]], p[:, col[self._spine]]) @ self._upright
+        W = np.broadcast_to(np.eye(4), (len(p), 4, 4)).copy()
+        W[:, :3, :3] = R
+        W[:, :3, 3] = 0.5 * (p[:, col["left_hip"]] + p[:, col["right_hip"]]) + R @ self._pelvis_from_mid
+        out = np.empty_like(p)
+        for f, k in col.items():
+            if self._anchor[f] is None:  # rigid with the pelvis: where the pelvis puts it
+                out[:, k] = W[:, :3, 3] + R @ self._local[f]
+        for anchor, group in self._groups.items():  # anchors in tree order: each one's target is known
+            ks = [col[f] for f in group]
+            offsets = np.array([self._offset[f] for f in group])
+            turn = best_rotations(offsets, p[:, ks] - p[:, [col[anchor]]])
+            out[:, ks] = out[:, [col[anchor]]] + np.einsum("nij,mj->nmi", turn, offsets)
+        return W, out
+
+    def solver(self) -> Solver:
+        """A solver rooted at the pelvis, with the rest pose as a light posture below every target."""
+        s = Solver(self.skeleton, restarts=0)
+        s.set_root("pelvis")
+        s.set_posture(None, REST_POSTURE_WEIGHT)
+        return s
+
+    def retarget(self, clip: BvhClip, progress: Callable[[int], None] | None = None) -> Retargeted:
+        """Solve every frame of ``clip``, each warm-started from the previous one's pose."""
+        W, points = self.world_targets(clip)
+        tracked = [(k, f) for k, f in enumerate(self.mapping) if f != "pelvis"]
+        frames = [self.skeleton.frame_of(f) for f in self.mapping]
+        s = self.solver()
+        n = clip.n_frames
+        Q = np.empty((n, self.skeleton.n_dofs))
+        err = np.zeros((n, len(frames)))
+        for i in range(n):
+            s.set_world_from_root(W[i])
+            s.set_targets({f: Target(points[i, k], position_only=True, priority=PRIORITIES[f]) for k, f in tracked})
+            for _ in range(STEPS_PER_FRAME if i else FIRST_FRAME_STEPS):
+                if s.step().step_norm < 1e-5:
+                    break
+            Q[i] = s.q
+            err[i] = np.linalg.norm(s.world_positions()[frames] - points[i], axis=1)
+            if progress is not None:
+                progress(i)
+        motion = Motion(self.skeleton, Q, ("pelvis",) * n, W, clip.frame_time)
+        return Retargeted(motion, dict(self.mapping), self.unmapped_frames, self.unmapped_clip, err,
+                          self.scale, self.up)
+
+
+def _anchors(skeleton: Skeleton, frames: list[str]) -> dict[str, str | None]:
+    """Each frame's nearest ancestor among ``frames``, or ``None`` when no angle moves it relative to the pelvis."""
+    mapped = {skeleton.frame_of(f): f for f in frames}
+    # Rigid with the pelvis: at the same place, pelvis at the origin, in the rest pose and in another pose.
+    a = world_frames(skeleton, skeleton.rest, np.eye(4), "pelvis")[1]
+    b = world_frames(skeleton, 0.5 * (skeleton.lower + skeleton.upper) + 0.1, np.eye(4), "pelvis")[1]
+    out = {}
+    for f in frames:
+        i = skeleton.frame_of(f)
+        up = int(skeleton.frame_parent[i])
+        while up >= 0 and up not in mapped:
+            up = int(skeleton.frame_parent[up])
+        out[f] = None if up < 0 or np.linalg.norm(a[i] - b[i]) < 1e-9 else mapped[up]
+    return out
+
+
+def retarget(skeleton: Skeleton, clip: BvhClip, mapping: Mapping[str, str] | None = None,
+             up: str | None = None) -> Retargeted:
+    """Retarget ``clip`` onto ``skeleton``; see :class:`Retargeter`."""
+    return Retargeter(skeleton, clip, mapping, up).retarget(clip)

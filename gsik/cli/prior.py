@@ -1,0 +1,88 @@
+"""``gsik retarget`` (a clip onto the biped) and ``gsik learn-prior`` (a pose prior from a clip)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TextIO
+
+import gsik
+from gsik.anim.retarget import Retargeted, Retargeter
+from gsik.anim.retarget_map import read_mapping
+from gsik.cli.common import check_out
+from gsik.cli.progress import progress_for
+from gsik.io.bvh import read_bvh
+from gsik.io.bvh_skeleton import write_motion_bvh
+from gsik.prior import fit_prior, write_prior
+
+
+def add_commands(add, common) -> None:
+    """Register both commands; ``add(name, help, description)`` makes a sub-parser, ``common`` adds --progress."""
+    p = add("retarget", "retarget a BVH clip onto the biped; report every mapped joint's error",
+            "Map the clip's joints to the biped's by name (common rigs; namespaces such as 'mixamorig:' "
+            "ignored; --map for others), scale by leg length, and solve each frame with the biped's joints "
+            "tracking the clip's by priority (ankles, wrists, head; then knees, elbows, toes, neck; then "
+            "shoulders), warm-started. Prints each mapped joint's error and what could not be mapped.")
+    _clip_options(p)
+    p.add_argument("--out", metavar="BIPED.bvh", help="write the biped's motion as BVH")
+    p.add_argument("--units", choices=("cm", "m"), default="cm", help="BVH length unit (default cm)")
+    p.add_argument("--up", choices=("z", "y"), help="BVH up axis (default: the clip's)")
+    common(p, solver=False)
+    p.set_defaults(run=cmd_retarget)
+
+    p = add("learn-prior", "learn the biped's pose prior (a Gaussian over its angles) from a BVH clip",
+            "Retarget the clip onto the biped (as 'gsik retarget') and write the mean and regularised "
+            "covariance of its poses as a .npz pose prior (gsik.prior); the shrinkage is chosen by "
+            "cross-validation over time segments of the clip.")
+    _clip_options(p)
+    p.add_argument("--out", metavar="PRIOR.npz", required=True, help="the pose prior file to write")
+    p.add_argument("--frames", type=int, help="use only the clip's first N frames")
+    p.add_argument("--source", default="", help="what the clip is and its licence, kept in the file")
+    common(p, solver=False)
+    p.set_defaults(run=cmd_learn_prior)
+
+
+def _clip_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("clip", metavar="CLIP.bvh", help="a BVH clip of a human rig")
+    p.add_argument("--map", metavar="MAP.yaml", help="biped frame -> clip joint entries the heuristics miss")
+    p.add_argument("--file-up", choices=("auto", "y", "z"), default="auto",
+                   help="the clip's up axis (default: detected over the whole clip)")
+
+
+def _retarget(args: argparse.Namespace, frames: int | None = None) -> Retargeted:
+    clip = read_bvh(args.clip)
+    if frames:
+        clip = type(clip)(clip.joints, clip.frame_time, clip.motion[:frames])
+    mapping = read_mapping(args.map) if args.map else None
+    rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up)
+    with progress_for(args, "retarget") as bar:
+        return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
+
+
+def _report(r: Retargeted, out: TextIO) -> None:
+    print(f"{r.motion.n_frames} frames, up {r.up}, scale {r.scale:.5g} m per file unit (leg length)", file=out)
+    print(f"{'biped frame':16} {'clip joint':20} {'mean':>8} {'p95':>8} {'max':>8}  [mm]", file=out)
+    for frame, joint, mean, p95, worst in r.error_table():
+        print(f"{frame:16} {joint:20} {mean:8.2f} {p95:8.2f} {worst:8.2f}", file=out)
+    print(f"biped frames not mapped: {', '.join(r.unmapped_frames) or 'none'}", file=out)
+    print(f"clip joints not used: {', '.join(r.unmapped_clip) or 'none'}", file=out)
+
+
+def cmd_retarget(args: argparse.Namespace, out: TextIO) -> int:
+    if args.out:
+        check_out(args.out, (".bvh",), "BVH")
+    r = _retarget(args)
+    _report(r, out)
+    if args.out:
+        write_motion_bvh(args.out, r.motion, units=args.units, up=args.up or r.up)
+        print(f"wrote {args.out}", file=out)
+    return 0
+
+
+def cmd_learn_prior(args: argparse.Namespace, out: TextIO) -> int:
+    check_out(args.out, (".npz",), "pose prior")
+    r = _retarget(args, args.frames)
+    _report(r, out)
+    prior = fit_prior(r.motion.q, r.motion.skeleton, source=args.source)
+    write_prior(prior, args.out)
+    print(f"wrote {args.out}: {prior.n_frames} poses, shrinkage {prior.shrinkage:g}", file=out)
+    return 0

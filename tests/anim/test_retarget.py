@@ -1,0 +1,124 @@
+"""Retargeting a BVH clip onto the biped (issue 12): name heuristics, mapping files, a round trip, a real clip."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gsik import load_skeleton
+from gsik.anim.motion import Motion
+from gsik.anim.retarget import Retargeter, best_rotations
+from gsik.anim.retarget_map import guess_mapping, normalise, read_mapping, resolve_mapping
+from gsik.errors import RetargetError
+from gsik.io.bvh import BvhClip, read_bvh
+from gsik.io.bvh_skeleton import motion_to_bvh
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+REAL_CLIP = Path(__file__).resolve().parents[3] / "shared" / "mocap" / "mocap_bvhtools_test.bvh"
+#: The biped's own names the heuristics do not know (its shoulders are not a rig's clavicles).
+BIPED_EXTRA = {"left_shoulder": "left_shoulder", "right_shoulder": "right_shoulder", "atlas": "atlas",
+               "waist": "waist"}
+
+
+def test_names_match_without_namespace_case_or_separators():
+    assert normalise("mixamorig:Left_Up-Leg") == "leftupleg"
+    clip = ["mixamorig:Hips", "mixamorig:LeftUpLeg", "mixamorig:LeftLeg", "mixamorig:LeftShoulder",
+            "mixamorig:LeftArm", "Thigh_R", "r_calf", "mixamorig:Head"]
+    frames = load_skeleton("biped").target_names
+    got = guess_mapping(clip, frames)
+    assert got == {"pelvis": "mixamorig:Hips", "left_hip": "mixamorig:LeftUpLeg", "left_knee": "mixamorig:LeftLeg",
+                   "left_shoulder": "mixamorig:LeftArm", "right_hip": "Thigh_R", "right_knee": "r_calf",
+                   "atlas": "mixamorig:Head"}  # the clavicle (LeftShoulder) drives nothing
+
+
+def test_a_mapping_file_overrides_the_heuristics_and_bad_names_are_refused(tmp_path):
+    path = tmp_path / "map.yaml"
+    path.write_text("format: 1\nmap:\n  left_knee: Shin_Left\n")
+    frames = load_skeleton("biped").target_names
+    assert resolve_mapping(["LeftLeg", "Shin_Left"], frames, read_mapping(path))["left_knee"] == "Shin_Left"
+    with pytest.raises(RetargetError, match="'left_kne'.*valid: .*'left_knee'"):
+        resolve_mapping(["LeftLeg"], frames, {"left_kne": "LeftLeg"})
+    with pytest.raises(RetargetError, match="'Knee'.*not in the clip.*'LeftLeg'"):
+        resolve_mapping(["LeftLeg"], frames, {"left_knee": "Knee"})
+    path.write_text("left_knee: Shin_Left\n")
+    with pytest.raises(RetargetError, match="needs a 'map:'"):
+        read_mapping(path)
+
+
+def test_a_rig_without_the_legs_the_retargeting_needs_is_refused_with_their_names():
+    clip = read_bvh(DATA / "mixamo_zyx_crlf.bvh")
+    with pytest.raises(RetargetError, match="'right_hip', 'right_knee', 'right_ankle'.*mapping file"):
+        Retargeter(load_skeleton("biped"), clip)
+
+
+def test_best_rotations_turn_rest_directions_onto_turned_ones():
+    rng = np.random.default_rng(0)
+    rest = rng.normal(size=(3, 3))
+    from gsik.rotations import matrix_from_rotvec
+    R = np.stack([matrix_from_rotvec(v) for v in rng.normal(size=(5, 3))])
+    got = best_rotations(rest, np.einsum("nij,mj->nmi", R, rest))
+    np.testing.assert_allclose(got, R, atol=1e-9)
+    one = best_rotations(rest[:1], np.einsum("nij,j->ni", R, rest[0])[:, None])
+    np.testing.assert_allclose(np.einsum("nij,j->ni", one, rest[0]), np.einsum("nij,j->ni", R, rest[0]), atol=1e-9)
+
+
+def _biped_clip(n: int = 40) -> tuple[BvhClip, Motion]:
+    """A biped motion (knees, elbows, hips, waist and neck swinging) exported as a y-up BVH clip."""
+    sk = load_skeleton("biped")
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    mid = 0.5 * (sk.lower + sk.upper)
+    q = sk.rest + 0.3 * np.sin(2 * np.pi * t + np.arange(sk.n_dofs)) * (mid - sk.rest + 0.3 * (sk.upper - sk.lower))
+    q = np.clip(q, sk.lower + 0.05, sk.upper - 0.05)
+    W = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+    W[:, :3, 3] = [0.1, 0.2, 1.0]
+    motion = Motion(sk, q, ("pelvis",) * n, W, 1 / 30)
+    return motion_to_bvh(motion, up="y"), motion
+
+
+def test_a_biped_clip_retargets_onto_the_biped_joint_for_joint():
+    clip, motion = _biped_clip()
+    rt = Retargeter(load_skeleton("biped"), clip, BIPED_EXTRA)
+    assert rt.up == "y" and abs(rt.scale - 0.01) < 1e-9  # cm, same legs
+    r = rt.retarget(clip)
+    assert r.unmapped_frames == () and "head" in r.unmapped_clip
+    want, got = motion.positions(), r.motion.positions()
+    joints = [motion.skeleton.frame_of(j) for j in motion.skeleton.joint_names]
+    # A few warm-started steps per frame: within millimetres of the clip's own biped, not exactly on it.
+    assert np.abs(got[:, joints] - want[:, joints]).max() < 5e-3  # metres
+    assert r.errors.max() < 5e-3
+
+
+@pytest.mark.skipif(not REAL_CLIP.exists(), reason=f"the real clip {REAL_CLIP} is not beside the repository")
+def test_a_real_clip_maps_every_biped_frame_and_keeps_its_joints():
+    full = read_bvh(REAL_CLIP)
+    clip = BvhClip(full.joints, full.frame_time, full.motion[:40])
+    r = Retargeter(load_skeleton("biped"), clip).retarget(clip)
+    assert r.unmapped_frames == ("head_top",)  # the clip's head End Site has no length
+    assert set(r.unmapped_clip) >= {"LeftShoulder", "RightShoulder", "Spine1", "Spine2"}
+    table = {row[0]: row for row in r.error_table()}
+    for frame in ("left_ankle", "right_ankle", "left_hand", "right_hand", "atlas"):  # priority 0
+        assert table[frame][3] < 1.0, table[frame]  # p95 [mm]
+    for frame in ("left_knee", "right_knee", "left_elbow", "right_elbow"):
+        assert table[frame][3] < 40.0, table[frame]
+
+
+def test_gsik_retarget_writes_a_biped_clip_and_reports_every_mapped_joint(tmp_path):
+    import io
+
+    from gsik.cli import main
+    from gsik.io.bvh import write_bvh
+
+    clip, _ = _biped_clip(10)
+    src, out, mapping = tmp_path / "clip.bvh", tmp_path / "biped.bvh", tmp_path / "map.yaml"
+    write_bvh(src, clip)
+    mapping.write_text("format: 1\nmap:\n" + "".join(f"  {k}: {v}\n" for k, v in BIPED_EXTRA.items()))
+    text = io.StringIO()
+    assert main(["retarget", str(src), "--map", str(mapping), "--out", str(out)], out=text) == 0, text.getvalue()
+    report = text.getvalue()
+    assert "left_knee" in report and "biped frames not mapped: none" in report and "clip joints not used:" in report
+    written = read_bvh(out)
+    assert written.n_frames == 10 and {"hips", "left_knee", "right_elbow"} <= {j.name for j in written.joints}
+    text = io.StringIO()
+    assert main(["retarget", str(src), "--out", str(tmp_path / "x.txt")], out=text) == 2
