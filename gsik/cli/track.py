@@ -78,21 +78,32 @@ def _targets(args: argparse.Namespace) -> tuple[list[str] | None, bool | list[st
     targets = split_names(args.effectors)
     poles = split_names(args.pole) or []
     priorities = _priority_map(args.priority)
-    if args.position_only is None:
-        position_only: bool | list[str] = False
-    elif "*" in args.position_only:
-        position_only = True
-    else:
-        position_only = split_names(args.position_only) or []
+    position_only = _position_only(args.position_only)
     if poles:
         if targets is None:
             raise CommandError("--pole needs --effectors (the targets the poles sit under)")
-        below = max([*priorities.values(), 0]) + 1
-        targets = [*targets, *(p for p in poles if p not in targets)]
-        priorities.update({p: below for p in poles if p not in priorities})
-        if position_only is not True:
-            position_only = [*(position_only or []), *poles]
+        targets, position_only = _add_poles(poles, targets, position_only, priorities)
     return targets, position_only, priorities or None
+
+
+def _position_only(values) -> bool | list[str]:
+    """``--position-only``: ``False`` when absent, ``True`` for ``*``, else the names listed."""
+    if values is None:
+        return False
+    if "*" in values:
+        return True
+    return split_names(values) or []
+
+
+def _add_poles(poles: list[str], targets: list[str], position_only: bool | list[str],
+               priorities: dict[str, int]) -> tuple[list[str], bool | list[str]]:
+    """Poles joined to the targets, by position only, one level below every other target (``priorities`` in place)."""
+    below = max([*priorities.values(), 0]) + 1
+    targets = [*targets, *(p for p in poles if p not in targets)]
+    priorities.update({p: below for p in poles if p not in priorities})
+    if position_only is not True:
+        position_only = [*(position_only or []), *poles]
+    return targets, position_only
 
 
 def _priority_map(values) -> dict[str, int]:
@@ -174,24 +185,41 @@ def _write_body_table(out: TextIO, result) -> None:
 
 
 def _track_folder(args: argparse.Namespace, out: TextIO) -> int:
+    clips = _folder_clips(args)
+    folder = make_dir(args.out) if args.out else None
+    rows = _track_clips(args, clips, folder)
+    out.write(format_track_table([rows[p] for p in clips]) + "\n")
+    failed = any(r.error for r in rows.values())
+    if folder is not None:
+        out.write(f"wrote {sum(not r.error for r in rows.values())} files to {args.out}\n")
+    return 2 if failed else 0
+
+
+def _folder_clips(args: argparse.Namespace) -> list[Path]:
+    """The folder's ``.bvh`` files in name order; refuses an empty folder and an ``--out`` that names a file."""
     clips = sorted(p for p in Path(args.clip).iterdir() if p.suffix.lower() == ".bvh" and p.is_file())
     if not clips:
         raise CommandError(f"folder {args.clip!r} holds no .bvh files")
     if args.out and Path(args.out).suffix.lower() == ".bvh":
         raise CommandError(f"--out {args.out!r}: with a folder of clips, --out names a folder")
-    folder = make_dir(args.out) if args.out else None
+    return clips
+
+
+def _track_clips(args: argparse.Namespace, clips: list[Path], folder: Path | None) -> dict[Path, TrackRow]:
+    """Track every clip in a pool of worker processes; each clip's summary row."""
     workers = args.workers or min(len(clips), os.cpu_count() or 1)
     rows: dict[Path, TrackRow] = {}
     with progress_for(args, f"track {len(clips)} clips") as progress, \
             ProcessPoolExecutor(max_workers=workers) as pool:
-        jobs = {pool.submit(track_one, args, str(p), str(folder / p.name) if folder else None): p for p in clips}
+        jobs = {pool.submit(track_one, args, str(p), _out_path(folder, p)): p for p in clips}
         for n, job in enumerate(as_completed(jobs), start=1):
             rows[jobs[job]] = job.result()
             progress(n, len(clips))
-    out.write(format_track_table([rows[p] for p in clips]) + "\n")
-    if folder is not None:
-        out.write(f"wrote {sum(not r.error for r in rows.values())} files to {args.out}\n")
-    return 0 if all(not r.error for r in rows.values()) else 2
+    return rows
+
+
+def _out_path(folder: Path | None, clip: Path) -> str | None:
+    return str(folder / clip.name) if folder else None
 
 
 def track_one(args: argparse.Namespace, path: str, out_path: str | None) -> TrackRow:

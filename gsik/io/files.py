@@ -99,30 +99,11 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     _check_path(path, "cannot write")
     target = os.path.realpath(os.fspath(path))  # through symbolic links: replace the file, not the link
     directory, base = os.path.split(target)
-    try:
-        mode = stat.S_IMODE(os.stat(target).st_mode)
-    except FileNotFoundError:
-        mode = None
-    except OSError as exc:
-        raise file_error("cannot write", path, exc) from exc
-    if mode is not None and (not mode & stat.S_IWUSR or not os.access(target, os.W_OK)):
-        err = GsikFileError(f"cannot write {show_value(os.fspath(path), MAX_PATH_CHARS)}: the file is read-only "
-                            "(make it writable, or save under another name)")
-        err.errno, err.filename = errno.EACCES, os.fspath(path)
-        raise err
+    mode = _writable_mode(path, target)
     _remove_stale_temporaries(directory, base)
     tmp = ""
     try:
-        flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
-        for _ in range(100):
-            tmp = os.path.join(directory, f".{base}.{os.getpid()}.{secrets.token_hex(6)}.tmp")
-            try:
-                fd = os.open(tmp, flags, 0o666)  # 0o666 & ~umask, like a normal new file
-                break
-            except FileExistsError:
-                continue
-        else:  # pragma: no cover - 100 random-name collisions
-            raise FileExistsError(f"no free temporary name next to {target}")
+        tmp, fd = _open_temporary(directory, base, target)
         with os.fdopen(fd, "wb") as f:
             f.write(text.encode("utf-8"))
             f.flush()
@@ -134,12 +115,45 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     except OSError as exc:
         raise file_error("cannot write", path, exc) from exc
     finally:
-        if tmp:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
+        _unlink_quietly(tmp)
     _fsync_directory(directory)
+
+
+def _writable_mode(path: str | os.PathLike, target: str) -> int | None:
+    """The permission bits of the existing ``target`` (``None`` when new); a read-only file is refused."""
+    try:
+        mode = stat.S_IMODE(os.stat(target).st_mode)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise file_error("cannot write", path, exc) from exc
+    if not mode & stat.S_IWUSR or not os.access(target, os.W_OK):
+        err = GsikFileError(f"cannot write {show_value(os.fspath(path), MAX_PATH_CHARS)}: the file is read-only "
+                            "(make it writable, or save under another name)")
+        err.errno, err.filename = errno.EACCES, os.fspath(path)
+        raise err
+    return mode
+
+
+def _open_temporary(directory: str, base: str, target: str) -> tuple[str, int]:
+    """A new ``.<base>.<pid>.<token>.tmp`` next to ``target``, opened for writing: its path and descriptor."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
+    for _ in range(100):
+        tmp = os.path.join(directory, f".{base}.{os.getpid()}.{secrets.token_hex(6)}.tmp")
+        try:
+            return tmp, os.open(tmp, flags, 0o666)  # 0o666 & ~umask, like a normal new file
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"no free temporary name next to {target}")  # pragma: no cover - 100 collisions
+
+
+def _unlink_quietly(path: str) -> None:
+    """Remove ``path`` if given; best effort."""
+    if path:
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
 
 
 def _remove_stale_temporaries(directory: str, base: str) -> None:

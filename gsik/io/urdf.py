@@ -12,7 +12,6 @@ and the offending value (and the XML parser's line number for broken XML).
 from __future__ import annotations
 
 import os
-import re
 import xml.etree.ElementTree as ET
 from collections import Counter
 from dataclasses import dataclass
@@ -22,6 +21,7 @@ import numpy as np
 
 from gsik.errors import UrdfError, choices, show_value
 from gsik.io.files import read_bytes
+from gsik.io.urdf_xml import children, link_ref, local_tag, only_child, scalar_attr, vector_attr
 from gsik.validate import finite_array
 
 #: Joint types this module parses (prismatic is parsed; conversion may reject it).
@@ -29,8 +29,6 @@ JOINT_TYPES = ("revolute", "continuous", "fixed", "prismatic")
 # Valid URDF, but with more than one DOF: named separately in the error message.
 _UNSUPPORTED_TYPES = ("floating", "planar")
 _LIMITED_TYPES = ("revolute", "prismatic")
-
-_NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 def _frozen_vector(v, what: str) -> np.ndarray:
@@ -232,65 +230,10 @@ def matrix_from_rpy(rpy) -> np.ndarray:
 # ---------------------------------------------------------------------------
 
 
-def _local(tag: str) -> str:
-    """Tag without an XML namespace (``{ns}robot`` -> ``robot``)."""
-    return tag.rsplit("}", 1)[-1] if isinstance(tag, str) else ""
-
-
-def _children(elem: ET.Element, tag: str) -> list[ET.Element]:
-    return [c for c in elem if _local(c.tag) == tag]
-
-
-def _number(token: str, where: str) -> float:
-    if _NUMBER_RE.fullmatch(token) and np.isfinite(value := float(token)):
-        return value
-    try:
-        value = float(token)
-    except ValueError:
-        raise UrdfError(f"{where}: non-numeric value {token!r}") from None
-    if not np.isfinite(value):
-        raise UrdfError(f"{where}: non-finite value {token!r}")
-    raise UrdfError(f"{where}: non-numeric value {token!r}")
-
-
-def _vector_attr(elem: ET.Element | None, attr: str, default: tuple[float, ...], where: str) -> np.ndarray:
-    """A 3-number attribute like ``xyz="0 0 0.1"``; ``default`` when element or attribute is missing."""
-    if elem is None or elem.get(attr) is None:
-        return np.array(default, dtype=float)
-    text = elem.get(attr)
-    where = f"{where} {attr}={text!r}"
-    tokens = text.split()
-    if len(tokens) != 3:
-        raise UrdfError(f"{where}: expected 3 numbers, found {len(tokens)}")
-    return np.array([_number(t, where) for t in tokens])
-
-
-def _scalar_attr(elem: ET.Element, attr: str, where: str) -> float:
-    text = elem.get(attr, "")
-    return _number(text.strip(), f"{where} {attr}={text!r}")
-
-
-def _only_child(elem: ET.Element, tag: str, where: str) -> ET.Element | None:
-    found = _children(elem, tag)
-    if len(found) > 1:
-        raise UrdfError(f"{where} has {len(found)} <{tag}> elements; expected at most one")
-    return found[0] if found else None
-
-
-def _link_ref(joint: ET.Element, tag: str, where: str, links: set[str]) -> str:
-    elem = _only_child(joint, tag, where)
-    if elem is None or not elem.get("link"):
-        raise UrdfError(f"{where} has no <{tag} link=...>")
-    name = elem.get("link")
-    if name not in links:
-        raise UrdfError(f"{where} references unknown link {name!r} as {tag}")
-    return name
-
-
 def _parse_links(robot: ET.Element) -> tuple[str, ...]:
     names: list[str] = []
     seen: set[str] = set()
-    for i, link in enumerate(_children(robot, "link")):
+    for i, link in enumerate(children(robot, "link")):
         name = link.get("name")
         if not name:
             raise UrdfError(f"<link> number {i + 1} has no name attribute")
@@ -304,14 +247,14 @@ def _parse_links(robot: ET.Element) -> tuple[str, ...]:
 def _parse_limits(elem: ET.Element, jtype: str, where: str) -> tuple[float | None, float | None]:
     if jtype not in _LIMITED_TYPES:
         return None, None  # continuous and fixed joints have no position limits
-    limit = _only_child(elem, "limit", where)
+    limit = only_child(elem, "limit", where)
     if limit is None:
         raise UrdfError(f"{where}: a {jtype} joint needs <limit lower=... upper=...>")
     missing = [a for a in ("lower", "upper") if limit.get(a) is None]
     if missing:
         raise UrdfError(f"{where}: <limit> has no {' or '.join(missing)} attribute")
-    lower = _scalar_attr(limit, "lower", f"{where} <limit>")
-    upper = _scalar_attr(limit, "upper", f"{where} <limit>")
+    lower = scalar_attr(limit, "lower", f"{where} <limit>")
+    upper = scalar_attr(limit, "upper", f"{where} <limit>")
     if lower > upper:
         raise UrdfError(f"{where} <limit>: lower={limit.get('lower')!r} is greater than upper={limit.get('upper')!r}")
     return lower, upper
@@ -329,15 +272,15 @@ def _parse_joint(elem: ET.Element, index: int, links: set[str]) -> UrdfJoint:
         raise UrdfError(f"{where}: joint type {jtype!r} is not supported; supported: {choices(JOINT_TYPES)}")
     if jtype not in JOINT_TYPES:
         raise UrdfError(f"{where}: unknown joint type {jtype!r}; expected one of {choices(JOINT_TYPES)}")
-    parent = _link_ref(elem, "parent", where, links)
-    child = _link_ref(elem, "child", where, links)
+    parent = link_ref(elem, "parent", where, links)
+    child = link_ref(elem, "child", where, links)
     if parent == child:
         raise UrdfError(f"{where} connects link {parent!r} to itself")
-    origin = _only_child(elem, "origin", where)
-    xyz = _vector_attr(origin, "xyz", (0.0, 0.0, 0.0), f"{where} <origin>")
-    rpy = _vector_attr(origin, "rpy", (0.0, 0.0, 0.0), f"{where} <origin>")
-    axis_elem = _only_child(elem, "axis", where)
-    axis = _vector_attr(axis_elem, "xyz", (1.0, 0.0, 0.0), f"{where} <axis>")
+    origin = only_child(elem, "origin", where)
+    xyz = vector_attr(origin, "xyz", (0.0, 0.0, 0.0), f"{where} <origin>")
+    rpy = vector_attr(origin, "rpy", (0.0, 0.0, 0.0), f"{where} <origin>")
+    axis_elem = only_child(elem, "axis", where)
+    axis = vector_attr(axis_elem, "xyz", (1.0, 0.0, 0.0), f"{where} <axis>")
     if not np.any(axis):
         if jtype != "fixed":
             raise UrdfError(f"{where} <axis xyz={axis_elem.get('xyz')!r}>: axis must not be zero")
@@ -413,12 +356,12 @@ def _root_link(links: tuple[str, ...], parent_of: dict[str, UrdfJoint]) -> str:
 def _reachable(root: str, joints: tuple[UrdfJoint, ...]) -> set[str]:
     """The links reached from ``root`` through the joints."""
     reached = {root}
-    children: dict[str, list[str]] = {}
+    child_links: dict[str, list[str]] = {}
     for j in joints:
-        children.setdefault(j.parent, []).append(j.child)
+        child_links.setdefault(j.parent, []).append(j.child)
     stack = [root]
     while stack:
-        for c in children.get(stack.pop(), ()):
+        for c in child_links.get(stack.pop(), ()):
             if c not in reached:
                 reached.add(c)
                 stack.append(c)
@@ -453,13 +396,13 @@ def _xml_root(data: str | bytes, source: str) -> ET.Element:
 
 def _robot_from_xml(root: ET.Element, source: str) -> UrdfRobot:
     try:
-        if _local(root.tag) != "robot":
-            raise UrdfError(f"root element is <{_local(root.tag)}>, expected <robot>")
+        if local_tag(root.tag) != "robot":
+            raise UrdfError(f"root element is <{local_tag(root.tag)}>, expected <robot>")
         links = _parse_links(root)
         link_set = set(links)
         joints: list[UrdfJoint] = []
         seen: set[str] = set()
-        for i, elem in enumerate(_children(root, "joint")):
+        for i, elem in enumerate(children(root, "joint")):
             joint = _parse_joint(elem, i, link_set)
             if joint.name in seen:
                 raise UrdfError(f"duplicate joint name {joint.name!r}")

@@ -82,6 +82,14 @@ def load_yaml(text: str, source: str, error: type[GsikError]) -> YamlDocument:
     Raises:
         error: ``"<source>:<line>: <problem>"`` for anything refused or malformed.
     """
+    _check_text(text, source, error)
+    builder = _Builder(source, error)
+    _parse_into(builder, text, source, error)
+    return YamlDocument(builder.data, builder.lines)
+
+
+def _check_text(text: str, source: str, error: type[GsikError]) -> None:
+    """Refuse what is not a str, too long, or holds a character YAML does not allow, before parsing."""
     if not isinstance(text, str):
         raise error(f"{source}: YAML text must be a str, got {type(text).__name__}")
     if len(text) > MAX_CHARS:
@@ -90,7 +98,10 @@ def load_yaml(text: str, source: str, error: type[GsikError]) -> YamlDocument:
     if bad:
         raise error(f"{source}:{text.count(chr(10), 0, bad.start()) + 1}: character U+{ord(bad.group()):04X} "
                     "is not allowed in YAML")
-    builder = _Builder(source, error)
+
+
+def _parse_into(builder: _Builder, text: str, source: str, error: type[GsikError]) -> None:
+    """Feed PyYAML's events to ``builder``; PyYAML's own errors become ``error`` with the line."""
     try:
         for event in yaml.parse(text, Loader=_Loader):
             builder.feed(event)
@@ -101,7 +112,6 @@ def load_yaml(text: str, source: str, error: type[GsikError]) -> YamlDocument:
         raise error(f"{source}{line}: not valid YAML: {problem}") from None
     except yaml.YAMLError as exc:  # ReaderError: a character the check above did not foresee
         raise error(f"{source}: not valid YAML: {show_value(str(exc))}") from None
-    return YamlDocument(builder.data, builder.lines)
 
 
 class _Collection:
@@ -226,12 +236,7 @@ class _Builder:
 
     def scalar(self, event: ev.ScalarEvent):
         if event.tag is None or event.tag == "!":
-            tag = _resolver.resolve(ScalarNode, event.value, event.implicit) if event.tag is None else _STR
-            if tag == _MERGE and self.stack and self.stack[-1].key is _NO_KEY and isinstance(self.stack[-1].value,
-                                                                                            dict):
-                self.fail(event, "merge keys ('<<') are not allowed in gsik files")
-            if tag in (_MERGE, _VALUE):
-                tag = _STR
+            tag = self.untagged(event)
         else:
             tag = self.check_tag(event, _STR)
         if tag == _STR:
@@ -239,6 +244,13 @@ class _Builder:
         if tag not in _TAGS and tag not in _IMPLICIT_EXTRA:  # pragma: no cover - the safe resolver's set
             self.fail(event, f"values of type {show_value(tag)} are not allowed in gsik files")
         return self.construct(event, tag)
+
+    def untagged(self, event: ev.ScalarEvent) -> str:
+        """The tag of a scalar written without one (``!`` forces a string); a merge key is refused."""
+        tag = _resolver.resolve(ScalarNode, event.value, event.implicit) if event.tag is None else _STR
+        if tag == _MERGE and self.stack and self.stack[-1].key is _NO_KEY and isinstance(self.stack[-1].value, dict):
+            self.fail(event, "merge keys ('<<') are not allowed in gsik files")
+        return _STR if tag in (_MERGE, _VALUE) else tag
 
     def construct(self, event: ev.ScalarEvent, tag: str):
         text = event.value

@@ -86,12 +86,17 @@ def _padded(plan: _Channels, order: str) -> _Channels:
     if plan.euler or not 0 < len(plan.channels) < 3:
         return plan
     own = [c[0] for c in plan.channels]
-    in_order = "".join(a for a in order if a in own) == "".join(own)
-    axes = list(order) if in_order else own + [a for a in order if a not in own]
+    axes = _padded_axes(own, order)
     where = {a: k for k, a in enumerate(own)}
     dofs = tuple(plan.dofs[where[a]] if a in where else -1 for a in axes)
     signs = tuple(plan.signs[where[a]] if a in where else 1.0 for a in axes)
     return _Channels(tuple(a + "rotation" for a in axes), dofs, signs, False)
+
+
+def _padded_axes(own: list[str], order: str) -> list[str]:
+    """All three axes: ``order``'s when the joint's ``own`` axes keep its relative order, else own ones first."""
+    in_order = "".join(a for a in order if a in own) == "".join(own)
+    return list(order) if in_order else own + [a for a in order if a not in own]
 
 
 def _usual_order(plans: list[_Channels], order: str) -> str:
@@ -132,24 +137,9 @@ def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z", *, pad_rotat
         raise BvhError("cannot export a motion with no frames")
     sk = motion.skeleton
     F = motion.n_frames
-    plans = [_joint_channels(sk, j, C, order) for j in range(sk.n_joints)]
-    if pad_rotations:
-        usual = _usual_order(plans, order)
-        plans = [_padded(plan, usual) for plan in plans]
-
-    # The top joint's world transform in each frame, from each frame's own root.
-    top_frame = int(sk.joint_frame[0])
-    top_R = np.empty((F, 3, 3))
-    top_p = np.empty((F, 3))
-    for f in range(F):
-        R, p = world_frames(sk, motion.q[f], motion.world_from_root[f], motion.roots[f])
-        top_R[f] = R[top_frame]
-        top_p[f] = p[top_frame]
-
-    site_joint = {}  # site index -> parent joint index
-    frame_to_joint = {int(fr): j for j, fr in enumerate(sk.joint_frame)}
-    for s, fr in enumerate(sk.site_frame):
-        site_joint[s] = frame_to_joint[int(sk.frame_parent[fr])]
+    plans = _channel_plans(sk, C, order, pad_rotations)
+    top_R, top_p = _top_world(motion)
+    site_joint = _site_joints(sk)
 
     joints: list[BvhJoint] = []
     columns: list[np.ndarray] = []  # (F,) per channel, in file order
@@ -203,15 +193,47 @@ def motion_to_bvh(motion: Motion, units: str = "cm", up: str = "z", *, pad_rotat
             add("", me, (0.0, 0.0, 0.0), is_end_site=True)
 
     emit(0, -1)
-    # End Sites get the parser's names, "<parent>_end", unique among all names.
-    taken = set(names)
+    _name_end_sites(joints, set(names))
+    motion_values = np.stack(columns, axis=1) if columns else np.zeros((F, 0))
+    return BvhClip(joints=tuple(joints), frame_time=motion.frame_time, motion=motion_values)
+
+
+def _channel_plans(sk: Skeleton, C: np.ndarray, order: str, pad_rotations: bool) -> list[_Channels]:
+    """Each joint's rotation channels, padded to three where ``pad_rotations`` asks."""
+    plans = [_joint_channels(sk, j, C, order) for j in range(sk.n_joints)]
+    if pad_rotations:
+        usual = _usual_order(plans, order)
+        plans = [_padded(plan, usual) for plan in plans]
+    return plans
+
+
+def _top_world(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+    """The top joint's world rotation (F, 3, 3) and position (F, 3) [m], from each frame's own root."""
+    sk = motion.skeleton
+    F = motion.n_frames
+    top_frame = int(sk.joint_frame[0])
+    top_R = np.empty((F, 3, 3))
+    top_p = np.empty((F, 3))
+    for f in range(F):
+        R, p = world_frames(sk, motion.q[f], motion.world_from_root[f], motion.roots[f])
+        top_R[f] = R[top_frame]
+        top_p[f] = p[top_frame]
+    return top_R, top_p
+
+
+def _site_joints(sk: Skeleton) -> dict[int, int]:
+    """Site index -> the index of the joint it hangs from."""
+    frame_to_joint = {int(fr): j for j, fr in enumerate(sk.joint_frame)}
+    return {s: frame_to_joint[int(sk.frame_parent[fr])] for s, fr in enumerate(sk.site_frame)}
+
+
+def _name_end_sites(joints: list[BvhJoint], taken: set[str]) -> None:
+    """End Sites get the parser's names, ``"<parent>_end"``, unique among all names (``joints`` in place)."""
     for i, joint in enumerate(joints):
         if joint.is_end_site:
             name = unique_name(joints[joint.parent].name + "_end", taken)
             taken.add(name)
             joints[i] = BvhJoint(name=name, parent=joint.parent, offset=joint.offset, is_end_site=True)
-    motion_values = np.stack(columns, axis=1) if columns else np.zeros((F, 0))
-    return BvhClip(joints=tuple(joints), frame_time=motion.frame_time, motion=motion_values)
 
 
 def pose_to_bvh(

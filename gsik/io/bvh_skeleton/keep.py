@@ -35,24 +35,40 @@ def clip_with_motion(imported: BvhImport, motion: Motion, wrap_angles: bool = Fa
     Raises:
         BvhError: no clip in ``imported``, a frame count that differs, or a DOF missing.
     """
+    clip = _matching_clip(imported, motion)
+    values = clip.motion.copy()
+    _write_dof_columns(values, imported, motion)
+    if not _top_pinned_as_clip(imported, motion):
+        values[:, clip.channel_index(0)] = _root_channels(imported, motion)
+    if wrap_angles:
+        _wrap_rotations(values, clip)
+    return BvhClip(clip.joints, clip.frame_time, values)
+
+
+def _matching_clip(imported: BvhImport, motion: Motion) -> BvhClip:
+    """The imported clip, refused when absent or of another frame count than ``motion``."""
     clip = imported.clip
     if clip is None:
         raise BvhError("clip_with_motion needs the BvhImport of import_bvh (it holds the clip)")
     if motion.n_frames != clip.n_frames:
         raise BvhError(f"the motion has {motion.n_frames} frames, the clip {clip.n_frames}")
-    values = clip.motion.copy()
+    return clip
+
+
+def _write_dof_columns(values: np.ndarray, imported: BvhImport, motion: Motion) -> None:
+    """Each DOF's rotation channel of ``values`` (F, channels) set to its angle in ``motion`` [deg], in place."""
     sk = motion.skeleton
     for dof, column in imported.dof_columns:
         if dof not in sk.dof_names:
             raise BvhError(f"the motion's skeleton {sk.name!r} has no DOF {dof!r} of the clip")
         values[:, column] = np.degrees(motion.q[:, sk.dof_index(dof)])
-    if not _top_pinned_as_clip(imported, motion):
-        values[:, clip.channel_index(0)] = _root_channels(imported, motion)
-    if wrap_angles:
-        rotations = [k for k, label in enumerate(c for j in clip.joints for c in j.channels)
-                     if label.endswith("rotation")]
-        values[:, rotations] = np.remainder(values[:, rotations] + 180.0, 360.0) - 180.0
-    return BvhClip(clip.joints, clip.frame_time, values)
+
+
+def _wrap_rotations(values: np.ndarray, clip: BvhClip) -> None:
+    """Every rotation channel of ``values`` (F, channels) wrapped into [-180, 180) [deg], in place."""
+    rotations = [k for k, label in enumerate(c for j in clip.joints for c in j.channels)
+                 if label.endswith("rotation")]
+    values[:, rotations] = np.remainder(values[:, rotations] + 180.0, 360.0) - 180.0
 
 
 def _top_pinned_as_clip(imported: BvhImport, motion: Motion) -> bool:
