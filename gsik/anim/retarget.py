@@ -173,6 +173,41 @@ def _layout(skeleton: Skeleton, mapping: Mapping[str, str], anchor: Mapping[str,
     return local, R[pelvis].T @ (p[pelvis] - mid), groups, offset
 
 
+def _targetable(skeleton: Skeleton) -> list[str]:
+    """The frames retargeting can aim, in tree order (an anchor before what hangs off it)."""
+    return sorted((f for f in skeleton.target_names if f in PRIORITIES or f == "pelvis"), key=skeleton.frame_of)
+
+
+def _required_mapping(names: list[str], targetable: list[str], mapping: Mapping[str, str] | None) -> dict[str, str]:
+    """``{skeleton frame: clip joint}`` by the heuristics and ``mapping``; :class:`RetargetError` if a
+    :data:`REQUIRED` frame is left without a clip joint."""
+    found = resolve_mapping(names, targetable, mapping)
+    missing = [f for f in REQUIRED if f not in found]
+    if missing:
+        raise RetargetError(f"cannot retarget: no clip joint maps to {choices(missing)} (clip joints: "
+                            f"{choices(names)}); name them in a mapping file")
+    return found
+
+
+def _unmapped(targetable: list[str], names: list[str], mapping: dict[str, str]) -> tuple[tuple[str, ...], ...]:
+    """The skeleton frames left without a clip joint, and the clip joints nothing follows."""
+    used = set(mapping.values())
+    return tuple(f for f in targetable if f not in mapping), tuple(n for n in names if n not in used)
+
+
+def _scale(skeleton: Skeleton, rest_positions: np.ndarray, clip_rest: dict[str, np.ndarray]) -> float:
+    """Skeleton leg length over the clip's (``rest_positions`` (n_frames, 3) [m]; ``clip_rest``: frame -> position)."""
+    return float(_leg_length(lambda f: rest_positions[skeleton.frame_of(f)]) / _leg_length(lambda f: clip_rest[f]))
+
+
+def _with_direction(found: dict[str, str], anchor: dict, rest_points: np.ndarray, scale: float) -> dict[str, str]:
+    """``found`` less the joints that sit at their anchor's place in the clip's rest pose (a zero End Site gives
+    no direction). ``rest_points`` (len(found), 3): the clip's rest positions of ``found``'s joints, in order."""
+    at = dict(zip(found, rest_points))
+    return {f: j for f, j in found.items()
+            if anchor[f] is None or np.linalg.norm(at[f] - at[anchor[f]]) > 1e-6 / scale}
+
+
 class Retargeter:
     """Retargets clips of one rig onto one skeleton (reuse it for every clip of that rig).
 
@@ -190,33 +225,27 @@ class Retargeter:
     def __init__(self, skeleton: Skeleton, clip: BvhClip, mapping: Mapping[str, str] | None = None,
                  up: str | None = None):
         names = [j.name for j in clip.joints]
-        targetable = sorted((f for f in skeleton.target_names if f in PRIORITIES or f == "pelvis"),
-                            key=skeleton.frame_of)  # tree order: an anchor before what hangs off it
-        found = resolve_mapping(names, targetable, mapping)
-        missing = [f for f in REQUIRED if f not in found]
-        if missing:
-            raise RetargetError(f"cannot retarget: no clip joint maps to {choices(missing)} (clip joints: "
-                                f"{choices(names)}); name them in a mapping file")
+        targetable = _targetable(skeleton)
+        found = _required_mapping(names, targetable, mapping)
         self.skeleton = skeleton
         self.up = detect_up(clip) if up is None else up
         index = {n: k for k, n in enumerate(names)}
         rest_clip = _rest_positions(clip)
         rest = world_frames(skeleton, skeleton.rest, np.eye(4), skeleton.root)
-        self.scale = float(_leg_length(lambda f: rest[1][skeleton.frame_of(f)])
-                           / _leg_length(lambda f: rest_clip[index[found[f]]]))
+        self.scale = _scale(skeleton, rest[1], {f: rest_clip[index[j]] for f, j in found.items()})
         self._anchor = _anchors(skeleton, [f for f in targetable if f in found])
-        # A joint at its anchor's place in the clip (a zero End Site) gives no direction: not mapped.
-        self.mapping = {f: j for f, j in found.items() if self._anchor[f] is None or np.linalg.norm(
-            rest_clip[index[j]] - rest_clip[index[found[self._anchor[f]]]]) > 1e-6 / self.scale}
+        self.mapping = _with_direction(found, self._anchor, rest_clip[[index[j] for j in found.values()]], self.scale)
         self._columns = np.array([index[j] for j in self.mapping.values()])
         self._spine = "waist" if "waist" in self.mapping else "neck"
-        at = clip_world_positions(clip, self.up)
-        self._upright = rig_lean(*(at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip", self._spine,
-                                                                            "neck")))
+        self._upright = self._lean(clip, index)
         self._local, self._pelvis_from_mid, self._groups, self._offset = _layout(skeleton, self.mapping,
                                                                                  self._anchor, rest)
-        self.unmapped_frames = tuple(f for f in targetable if f not in self.mapping)
-        self.unmapped_clip = tuple(n for n in names if n not in set(self.mapping.values()))
+        self.unmapped_frames, self.unmapped_clip = _unmapped(targetable, names, self.mapping)
+
+    def _lean(self, clip: BvhClip, index: dict[str, int]) -> np.ndarray:
+        """The rotation (3, 3) that takes out the rig's constant lean, averaged over ``clip``."""
+        at = clip_world_positions(clip, self.up)
+        return rig_lean(*(at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip", self._spine, "neck")))
 
     def world_targets(self, clip: BvhClip) -> tuple[np.ndarray, np.ndarray]:
         """Per frame: the pelvis's world transform (n, 4, 4) and the mapped frames' targets (n, n_mapped, 3) [m]."""
