@@ -52,27 +52,37 @@ class AttemptPolicy:
             self.set_q(q0)
         if self._settled is not None and self._settled[0] == self._reach_key():
             return self._result(self._settled[1], O_COST, 1)  # nothing further can do better: no work
-        s = self._settings
+        stats, attempts = self._attempts()
+        self._ws.x[:] = 0.0
+        self._ws.lam[0] = self._settings.damping
+        if self._is_controlled:
+            return self._control_result(_STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
+                                        float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
+        self._remember_settled(stats)
+        return self._result(stats, O_COST, attempts)
+
+    def _attempts(self) -> tuple[np.ndarray, int]:
+        """``(statistics of the best attempt, attempts made)``: the first attempt from the current angles, then
+        the further ones the settings and its outcome call for; the best one is left as the state."""
+        restarts = self._settings.restarts > 0
         start = self._q.copy()
         self._work_done[:] = 0
         stats = self._solve_from(start)
         attempts = 1
-        if stats[O_STATUS] != Status.CONVERGED and s.restarts > 0:
+        if stats[O_STATUS] != Status.CONVERGED and restarts:
             stats, attempts = self._restart(start, stats)
-        elif s.restarts > 0 and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0:
+        elif restarts and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0:
             stats, attempts = self._posture_attempt(stats)
         stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
-        self._ws.x[:] = 0.0
-        self._ws.lam[0] = s.damping
-        if self._is_controlled:
-            return self._control_result(_STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
-                                        float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
+        return stats, attempts
+
+    def _remember_settled(self, stats: np.ndarray) -> None:
+        """Keep a best reach (a stalled solve) so that the same solve again from it does no work."""
         self._settled = None
         if stats[O_STATUS] == Status.STALLED:
             settled = stats.copy()
             settled[O_ITERATIONS] = settled[O_SWEEPS] = 0
             self._settled = (self._reach_key(), settled)
-        return self._result(stats, O_COST, attempts)
 
     def _reach_key(self) -> tuple:
         """What a solve's outcome depends on: settings, root and its pose, targets, start angles."""
@@ -82,34 +92,41 @@ class AttemptPolicy:
 
     def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
         """Further attempts after a failed first one; leaves the best attempt as the state."""
-        s = self._settings
-        sk = self._skeleton
         best = (self._attempt_rank(stats), self._q.copy(), stats)
-        rng = np.random.default_rng(s.seed)
+        rng = np.random.default_rng(self._settings.seed)
         attempts = 1
         repeats = 0
-        while stats[O_STATUS] != Status.CONVERGED and attempts <= s.restarts:
-            if attempts == 1 and self._posture is not None:
-                stats = self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
-            elif attempts == 1:
-                stats = self._solve_by_continuation(start)
-            else:
-                # Random restarts: ever bolder blends of the start with a random pose within the limits.
-                alpha = min(1.0, 0.25 * attempts)
-                stats = self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
+        while stats[O_STATUS] != Status.CONVERGED and attempts <= self._settings.restarts:
+            stats = self._further_attempt(attempts, start, rng)
             attempts += 1
-            agrees = (not self._is_controlled
-                      and abs(stats[O_COST] - best[2][O_COST]) <= SETTLED_AGREEMENT * best[2][O_COST])
+            repeats += self._repeats_best(stats, best[2])
             rank = self._attempt_rank(stats)
             if stats[O_STATUS] == Status.CONVERGED or rank < best[0]:
                 best = (rank, self._q.copy(), stats)
-            repeats += agrees and stats[O_STATUS] != Status.CONVERGED
             if repeats >= SETTLED_REPEATS:
                 break  # attempts from other starts keep finding the same best reach: the best there is to find
         if best[2] is not stats:
             # An earlier attempt was best: make it the state again (frames and errors included).
             self._solve_from(best[1], iterations=0)
         return best[2], attempts
+
+    def _further_attempt(self, attempts: int, start: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Attempt ``attempts + 1``: from the posture or by continuation first, then random restarts."""
+        if attempts == 1 and self._posture is not None:
+            return self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
+        if attempts == 1:
+            return self._solve_by_continuation(start)
+        # Random restarts: ever bolder blends of the start with a random pose within the limits.
+        sk = self._skeleton
+        alpha = min(1.0, 0.25 * attempts)
+        return self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
+
+    def _repeats_best(self, stats: np.ndarray, best: np.ndarray) -> bool:
+        """True if an unconverged attempt ended where the best one did (``best`` before this attempt), within
+        :data:`SETTLED_AGREEMENT`; never with priorities, posture or balance."""
+        agrees = (not self._is_controlled
+                  and abs(stats[O_COST] - best[O_COST]) <= SETTLED_AGREEMENT * best[O_COST])
+        return agrees and stats[O_STATUS] != Status.CONVERGED
 
     def _posture_attempt(self, stats: np.ndarray) -> tuple[np.ndarray, int]:
         """A second attempt from the posture after a converged first one; the better one stays the state."""
@@ -162,11 +179,22 @@ class AttemptPolicy:
         finally:
             tp[:], tR[:] = final_p, final_R
         return self._solve_from(self._q.copy())
+
     def _control_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """One attempt of prioritised steps from ``q0`` until the pose holds; statistics as the kernel's solve."""
         c = self._make_controller()
         self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
         self._refresh_frames()
+        st, it = self._control_steps(c, iterations)
+        stats = np.zeros(kernels.N_STATS)
+        stats[O_STATUS] = self._control_status(c, st)
+        stats[O_ITERATIONS] = it if iterations else 0
+        stats[O_COST] = c.target_cost(self._ws.R, self._ws.p)
+        stats[O_STEP_NORM] = 0.0 if st is None else st.step_norm
+        return stats
+
+    def _control_steps(self, c, iterations: int) -> tuple:
+        """``(last step's ControlStats or None, steps made)``: at most ``iterations`` prioritised steps."""
         lam = np.array([self._settings.damping])
         settles = self._posture is not None or self._balance  # keep going after convergence until they hold
         st = None
@@ -175,11 +203,10 @@ class AttemptPolicy:
             st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
             if st.held or (st.converged and not settles):
                 break
-        stats = np.zeros(kernels.N_STATS)
-        converged = c.converged(self._ws.R, self._ws.p)
-        stats[O_STATUS] = (Status.CONVERGED if converged else Status.STALLED if st is not None and st.held
-                                    else Status.BUDGET_EXHAUSTED)
-        stats[O_ITERATIONS] = it if iterations else 0
-        stats[O_COST] = c.target_cost(self._ws.R, self._ws.p)
-        stats[O_STEP_NORM] = 0.0 if st is None else st.step_norm
-        return stats
+        return st, it
+
+    def _control_status(self, c, st) -> Status:
+        """How a prioritised attempt ended, given its last step ``st`` (None if it made none)."""
+        if c.converged(self._ws.R, self._ws.p):
+            return Status.CONVERGED
+        return Status.STALLED if st is not None and st.held else Status.BUDGET_EXHAUSTED

@@ -262,11 +262,7 @@ class Solver(AttemptPolicy):
             raise TargetError(f"targets must be a mapping of effector name to Target, got {type(targets).__name__}")
         out = {}
         for name, t in targets.items():
-            if name not in self._topo.effector_names and (name == self.root or name not in self._target_frames):
-                extra = f" ({name!r} is the IK root)" if name == self.root else ""
-                others = [n for n in self.target_names if n not in self._topo.effector_names]
-                raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}; "
-                                  f"other joints and sites: {choices(others)}")
+            self._check_target_name(name)
             if t is None:
                 continue
             if not isinstance(t, Target):
@@ -274,6 +270,15 @@ class Solver(AttemptPolicy):
             if t.enabled:  # a disabled target leaves its effector free, as no target does
                 out[name] = t
         return out
+
+    def _check_target_name(self, name) -> None:
+        """Raise :class:`TargetError` unless ``name`` is an effector, or a joint or site other than the root."""
+        if name in self._topo.effector_names or (name != self.root and name in self._target_frames):
+            return
+        extra = f" ({name!r} is the IK root)" if name == self.root else ""
+        others = [n for n in self.target_names if n not in self._topo.effector_names]
+        raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}; "
+                          f"other joints and sites: {choices(others)}")
 
     # -- solving --------------------------------------------------------------
     def step(self, targets: Mapping[str, Target | None] | None = None) -> SolveResult:
