@@ -265,26 +265,37 @@ class Controller:
         fresh = cached is not None and np.array_equal(cached[0], q) and np.array_equal(cached[1], W)
         state0 = cached[2] if fresh else self._level_state(q, R, p)
         damping = lam[0] if s.adaptive_damping else s.damping
-        dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), self._dampings(damping))
-        for tries in range(4):
-            verdict, q2, R2, p2, state = self._trial(q, q + dq, W, state0, damping)
-            if verdict != "worse" or not s.adaptive_damping:
-                break
-            dq = 0.5 * dq
+        tries, (verdict, q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
         accepted = verdict == "better" or not s.adaptive_damping
         if accepted:
             step_norm = float(np.linalg.norm(q2 - q))
             q[:], R[:], p[:] = q2, R2, p2
             self._state_cache = (q.copy(), W.copy(), state)
-            if s.adaptive_damping:
-                lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
         else:
             step_norm = 0.0
-            if verdict == "worse":
-                lam[0] = min(damping * 10.0, 1e6)
+        self._adapt_damping(lam, damping, verdict, accepted, tries)
         held = s.adaptive_damping and (verdict == "same" or (accepted and step_norm <= s.stall_tolerance))
         converged, cost = self._summary(R, p)
         return ControlStats(accepted, held, converged, cost, step_norm)
+
+    def _damped_trial(self, q, W, R, p, state0, damping) -> tuple[int, tuple]:
+        """``(halvings made, trial)``: the prioritised step from ``q``, halved up to 3 times while its
+        trial (:meth:`_trial`) is worse (with adaptive damping only)."""
+        dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), self._dampings(damping))
+        for tries in range(4):
+            trial = self._trial(q, q + dq, W, state0, damping)
+            if trial[0] != "worse" or not self._settings.adaptive_damping:
+                break
+            dq = 0.5 * dq
+        return tries, trial
+
+    def _adapt_damping(self, lam: np.ndarray, damping: float, verdict: str, accepted: bool, tries: int) -> None:
+        """Levenberg-Marquardt on ``lam`` (1,): lower it after a full step taken, raise it after a worse one."""
+        s = self._settings
+        if accepted and s.adaptive_damping:
+            lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
+        elif not accepted and verdict == "worse":
+            lam[0] = min(damping * 10.0, 1e6)
 
     def _dampings(self, lam: float) -> np.ndarray:
         """Damping per level: the adaptive one for the targets and balance, the fixed one for the

@@ -149,13 +149,21 @@ def _check_setting(name: str, kind: str, v):
         return bool(v)
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, Real):
         raise SolverError(f"setting {name} must be a number, got {show_value(v)}")
-    if kind == "int":
-        if not (isinstance(v, Integral) or float(v).is_integer()):
-            raise SolverError(f"setting {name} must be a whole number, got {show_value(v)}")
-        top = MAX_COUNTS[name]
-        if not 0 <= v <= top:
-            raise SolverError(f"setting {name} must be between 0 and {top:,}, got {show_value(v)}")
-        return int(v)
+    return _check_count(name, v) if kind == "int" else _check_real(name, v)
+
+
+def _check_count(name: str, v: Real) -> int:
+    """A count setting: a whole number in [0, its maximum in :data:`MAX_COUNTS`]."""
+    if not (isinstance(v, Integral) or float(v).is_integer()):
+        raise SolverError(f"setting {name} must be a whole number, got {show_value(v)}")
+    top = MAX_COUNTS[name]
+    if not 0 <= v <= top:
+        raise SolverError(f"setting {name} must be between 0 and {top:,}, got {show_value(v)}")
+    return int(v)
+
+
+def _check_real(name: str, v: Real) -> float:
+    """A real setting: finite, in [0, :data:`MAX_SETTING`]."""
     try:
         x = float(v)
     except OverflowError:  # an integer beyond float's range

@@ -9,23 +9,24 @@ frame's ``dq`` is the next frame's starting guess (warm start).
 
 from __future__ import annotations
 
-import enum
 import math
 from collections.abc import Mapping
 from dataclasses import replace
-from typing import NamedTuple
 
 import numpy as np
 
 from gsik import control, kernels
+from gsik.attempts import SETTLED_AGREEMENT, SETTLED_REPEATS, AttemptPolicy  # noqa: F401  (re-exported)
 from gsik.balance import center_of_mass
 from gsik.errors import SolverError, TargetError, choices, show_value
-from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
-from gsik.kernels import solve as solve_kernels
+from gsik.kernels import O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, O_COST, TargetArrays
+from gsik.kernels import solve as solve_kernels  # noqa: F401  (gsik.solver.solve_kernels, as before)
 from gsik.kernels import step as step_kernels
 from gsik.kernels.kinematics import forward_kinematics
 from gsik.kinematics import Topology, kinematic_model, topology
-from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix, transform
+from gsik.result import (_STATUSES, SolveResult, Status, errors_by_effector, max_orientation_error,  # noqa: F401
+                         max_position_error)  # re-exported: gsik.solver's names as before the split
+from gsik.rotations import transform
 from gsik.skeleton import Skeleton
 from gsik.settings import PAPER_METHOD, SolverSettings, setting_names
 from gsik.targets import MAX_COORDINATE, Target
@@ -33,95 +34,7 @@ from gsik.targets import MAX_COORDINATE, Target
 __all__ = ["PAPER_METHOD", "SolveResult", "Solver", "SolverSettings", "Status", "setting_names"]
 
 
-class Status(enum.IntEnum):
-    """How a step or a solve ended; the values are the kernels' status codes."""
-
-    #: Every enabled effector is within the position and orientation tolerances.
-    CONVERGED = kernels.CONVERGED
-    #: Not converged, and the pose no longer changes: the best reach.
-    STALLED = kernels.STALLED
-    #: The iteration budget ran out while the pose was still improving.
-    BUDGET_EXHAUSTED = kernels.BUDGET_EXHAUSTED
-    #: The step would have made an angle or an error non-finite: it was refused, the previous pose kept.
-    REFUSED = kernels.BUDGET_EXHAUSTED + 1
-
-    @property
-    def label(self) -> str:
-        """Words for people: "converged", "stalled", "budget exhausted"."""
-        return self.name.lower().replace("_", " ")
-
-
-#: Attempts ending with weighted errors this close (relative) found the same best reach ...
-SETTLED_AGREEMENT = 1e-3
-#: ... and this many further attempts finding it again settle it: the solve stops.
-SETTLED_REPEATS = 8
-
-_STATUSES = tuple(Status)  # by code: a tuple index costs less than Status(code)
-
-
-class SolveResult(NamedTuple):
-    """What a step or a solve produced. Plain data; arrays are read-only copies.
-
-    Attributes:
-        q: Joint angles (n_dofs,) [rad] after the call.
-        status: :class:`Status`.
-        iterations: Gauss-Seidel sweeps of a step; linearisations of a solve,
-            all its attempts together.
-        sweeps: Gauss-Seidel sweeps in all (of all attempts).
-        residual: Projected ``|Ax - b|`` of the last sweep (a step), or the
-            weighted squared error ``0.5 e^T W e`` (a solve).
-        effector_names: (m,) effectors, in the order of the error arrays.
-        position_errors: (m,) distance to each target [m] (0 without a target).
-        orientation_errors: (m,) angle to each target orientation [rad] (0
-            where the orientation is not used).
-        step_norm: Size of the last change of ``q`` [rad].
-        attempts: Attempts :meth:`Solver.solve` made (1 for a step; 1 with
-            no work when it starts from a settled best reach).
-    """
-
-    q: np.ndarray
-    status: Status
-    iterations: int
-    sweeps: int
-    residual: float
-    effector_names: tuple[str, ...]
-    position_errors: np.ndarray
-    orientation_errors: np.ndarray
-    step_norm: float = 0.0
-    attempts: int = 1
-
-    @property
-    def converged(self) -> bool:
-        return self.status is Status.CONVERGED
-
-    max_position_error = property(lambda self: max_position_error(self), doc="Largest position error [m].")
-    max_orientation_error = property(lambda self: max_orientation_error(self),
-                                     doc="Largest orientation error [rad].")
-
-    def errors(self) -> dict[str, tuple[float, float]]:
-        """``{effector: (position error [m], orientation error [rad])}``."""
-        return errors_by_effector(self)
-
-
-# Summaries of any result holding effector_names, position_errors and orientation_errors
-# (NamedTuples cannot share a mixin, so the results share these functions).
-def max_position_error(result) -> float:
-    """Largest position error [m] of a result."""
-    return float(result.position_errors.max(initial=0.0))
-
-
-def max_orientation_error(result) -> float:
-    """Largest orientation error [rad] of a result."""
-    return float(result.orientation_errors.max(initial=0.0))
-
-
-def errors_by_effector(result) -> dict[str, tuple[float, float]]:
-    """``{effector: (position error [m], orientation error [rad])}`` of a result."""
-    return {n: (float(p), float(o)) for n, p, o in zip(result.effector_names, result.position_errors,
-                                                       result.orientation_errors)}
-
-
-class Solver:
+class Solver(AttemptPolicy):
     """A stateful IK solver for one skeleton.
 
     The solver keeps the joint angles, the pinned root and the previous
@@ -349,11 +262,7 @@ class Solver:
             raise TargetError(f"targets must be a mapping of effector name to Target, got {type(targets).__name__}")
         out = {}
         for name, t in targets.items():
-            if name not in self._topo.effector_names and (name == self.root or name not in self._target_frames):
-                extra = f" ({name!r} is the IK root)" if name == self.root else ""
-                others = [n for n in self.target_names if n not in self._topo.effector_names]
-                raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}; "
-                                  f"other joints and sites: {choices(others)}")
+            self._check_target_name(name)
             if t is None:
                 continue
             if not isinstance(t, Target):
@@ -361,6 +270,15 @@ class Solver:
             if t.enabled:  # a disabled target leaves its effector free, as no target does
                 out[name] = t
         return out
+
+    def _check_target_name(self, name) -> None:
+        """Raise :class:`TargetError` unless ``name`` is an effector, or a joint or site other than the root."""
+        if name in self._topo.effector_names or (name != self.root and name in self._target_frames):
+            return
+        extra = f" ({name!r} is the IK root)" if name == self.root else ""
+        others = [n for n in self.target_names if n not in self._topo.effector_names]
+        raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}; "
+                          f"other joints and sites: {choices(others)}")
 
     # -- solving --------------------------------------------------------------
     def step(self, targets: Mapping[str, Target | None] | None = None) -> SolveResult:
@@ -422,146 +340,6 @@ class Solver:
         return SolveResult(out[:n], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]), int(stats[O_SWEEPS]),
                            stats[residual_index], self._topo.effector_names, out[n:n + m], out[n + m:],
                            stats[O_STEP_NORM], attempts)
-
-    def solve(self, targets: Mapping[str, Target | None] | None = None, q0=None) -> SolveResult:
-        """Solve to convergence (or best reach) from ``q0`` (default: the current angles).
-
-        Levenberg-Marquardt over PGS steps (:func:`gsik.kernels.step.solve`). If
-        that does not converge, up to ``settings.restarts`` more attempts:
-        first a continuation (the targets approached in stages from the
-        current effector poses), then random restarts inside the limits.
-        The best attempt (lowest weighted error) is kept and becomes the
-        solver's state. With priorities, posture or balance each attempt runs
-        prioritised steps until the pose holds (:mod:`gsik.control`),
-        attempts are compared level by level, and the first further attempt
-        starts from the posture; a converged attempt whose posture is not met
-        is compared with one from the posture too, as the targets may be met
-        on another branch nearer to it.
-        Each attempt (:func:`gsik.kernels.solve.solve`) meets the positions
-        first when an orientation is far off. Without priorities, posture or
-        balance the attempts stop early once the best reach is settled
-        (:data:`SETTLED_REPEATS` attempts end where the best one did, within
-        :data:`SETTLED_AGREEMENT`), and at once when a solve starts from the
-        best reach a previous solve settled on, with the same targets and
-        settings. The result counts the linearisations (``iterations``) and
-        sweeps of all attempts.
-        """
-        if targets is not None:
-            self.set_targets(targets)
-        if q0 is not None:
-            self.set_q(q0)
-        if self._settled is not None and self._settled[0] == self._reach_key():
-            return self._result(self._settled[1], O_COST, 1)  # nothing further can do better: no work
-        s = self._settings
-        start = self._q.copy()
-        self._work_done[:] = 0
-        stats = self._solve_from(start)
-        attempts = 1
-        if stats[O_STATUS] != Status.CONVERGED and s.restarts > 0:
-            stats, attempts = self._restart(start, stats)
-        elif s.restarts > 0 and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0:
-            stats, attempts = self._posture_attempt(stats)
-        stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
-        self._ws.x[:] = 0.0
-        self._ws.lam[0] = s.damping
-        if self._is_controlled:
-            return self._control_result(_STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
-                                        float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
-        self._settled = None
-        if stats[O_STATUS] == Status.STALLED:
-            settled = stats.copy()
-            settled[O_ITERATIONS] = settled[O_SWEEPS] = 0
-            self._settled = (self._reach_key(), settled)
-        return self._result(stats, O_COST, attempts)
-
-    def _reach_key(self) -> tuple:
-        """What a solve's outcome depends on: settings, root and its pose, targets, start angles."""
-        t = self._packed
-        return (self._settings, self._topo.root_frame, self._W.tobytes(), t.position.tobytes(),
-                t.rotation.tobytes(), t.row_weight.tobytes(), self._q.tobytes())
-
-    def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
-        """Further attempts after a failed first one; leaves the best attempt as the state."""
-        s = self._settings
-        sk = self._skeleton
-        best = (self._attempt_rank(stats), self._q.copy(), stats)
-        rng = np.random.default_rng(s.seed)
-        attempts = 1
-        repeats = 0
-        while stats[O_STATUS] != Status.CONVERGED and attempts <= s.restarts:
-            if attempts == 1 and self._posture is not None:
-                stats = self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
-            elif attempts == 1:
-                stats = self._solve_by_continuation(start)
-            else:
-                # Random restarts: ever bolder blends of the start with a random pose within the limits.
-                alpha = min(1.0, 0.25 * attempts)
-                stats = self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
-            attempts += 1
-            agrees = (not self._is_controlled
-                      and abs(stats[O_COST] - best[2][O_COST]) <= SETTLED_AGREEMENT * best[2][O_COST])
-            rank = self._attempt_rank(stats)
-            if stats[O_STATUS] == Status.CONVERGED or rank < best[0]:
-                best = (rank, self._q.copy(), stats)
-            repeats += agrees and stats[O_STATUS] != Status.CONVERGED
-            if repeats >= SETTLED_REPEATS:
-                break  # attempts from other starts keep finding the same best reach: the best there is to find
-        if best[2] is not stats:
-            # An earlier attempt was best: make it the state again (frames and errors included).
-            self._solve_from(best[1], iterations=0)
-        return best[2], attempts
-
-    def _posture_attempt(self, stats: np.ndarray) -> tuple[np.ndarray, int]:
-        """A second attempt from the posture after a converged first one; the better one stays the state."""
-        first = (self._attempt_rank(stats), self._q.copy(), stats)
-        second = self._solve_from(self._posture.reference)
-        if second[O_STATUS] == Status.CONVERGED and self._attempt_rank(second) < first[0]:
-            return second, 2
-        self._solve_from(first[1], iterations=0)
-        return first[2], 2
-
-    def _attempt_rank(self, stats: np.ndarray) -> tuple:
-        """How good the attempt that just ended is (lower is better): its weighted error, or with
-        priorities its levels' errors in order, so no attempt is preferred for a lower level's sake."""
-        if self._is_controlled:
-            return self._make_controller().rank(self._q, self._ws.R, self._ws.p)
-        return (float(stats[O_COST]),)
-
-    def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
-        """One attempt from ``q0``; returns a copy of its statistics and adds its work to ``_work_done``."""
-        s = self._settings
-        if self._is_controlled:
-            stats = self._control_solve(q0, s.max_iterations if iterations is None else iterations)
-        else:
-            self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
-            before = self._q.copy()
-            solve_kernels.solve(self._model, s.kernel_settings(for_solve=True), self._packed,
-                                self._topo.root_frame, self._W, self._q,
-                                s.max_iterations if iterations is None else iterations, self._ws)
-            self._refuse_non_finite(before, self._ws.stats)
-            stats = self._ws.stats.copy()
-        self._work_done[0] += int(stats[O_ITERATIONS])
-        self._work_done[1] += int(stats[O_SWEEPS])
-        return stats
-
-    def _solve_by_continuation(self, q0: np.ndarray, stages: int = 4) -> np.ndarray:
-        """Approach the targets in ``stages`` from where the effectors are at ``q0``."""
-        tp, tR = self._packed.position, self._packed.rotation
-        final_p, final_R = tp.copy(), tR.copy()
-        self._q[:] = q0
-        self._refresh_frames()
-        start_p = self._ws.p[self._topo.effector_frame].copy()
-        start_R = self._ws.R[self._topo.effector_frame].copy()
-        try:
-            for k in range(1, stages):
-                a = k / stages
-                for i in range(len(final_p)):
-                    tp[i] = (1 - a) * start_p[i] + a * final_p[i]
-                    tR[i] = matrix_from_rotvec(a * rotvec_from_matrix(final_R[i] @ start_R[i].T)) @ start_R[i]
-                self._solve_from(self._q.copy())
-        finally:
-            tp[:], tR[:] = final_p, final_R
-        return self._solve_from(self._q.copy())
 
     def set_root(self, name: str) -> None:
         """Make the joint or site ``name`` the IK root; the pose does not move.
@@ -669,28 +447,6 @@ class Solver:
         st = self._make_controller().step(self._q, self._W, self._ws.R, self._ws.p, self._ws.lam)
         status = Status.CONVERGED if st.converged else Status.STALLED if st.held else Status.BUDGET_EXHAUSTED
         return self._control_result(status, 1, st.cost, st.step_norm, 1)
-
-    def _control_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
-        """One attempt of prioritised steps from ``q0`` until the pose holds; statistics as the kernel's solve."""
-        c = self._make_controller()
-        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
-        self._refresh_frames()
-        lam = np.array([self._settings.damping])
-        settles = self._posture is not None or self._balance  # keep going after convergence until they hold
-        st = None
-        it = 0
-        for it in range(1, iterations + 1):
-            st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
-            if st.held or (st.converged and not settles):
-                break
-        stats = np.zeros(kernels.N_STATS)
-        converged = c.converged(self._ws.R, self._ws.p)
-        stats[O_STATUS] = (Status.CONVERGED if converged else Status.STALLED if st is not None and st.held
-                                    else Status.BUDGET_EXHAUSTED)
-        stats[O_ITERATIONS] = it if iterations else 0
-        stats[O_COST] = c.target_cost(self._ws.R, self._ws.p)
-        stats[O_STEP_NORM] = 0.0 if st is None else st.step_norm
-        return stats
 
     def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
                         attempts: int) -> SolveResult:

@@ -156,6 +156,17 @@ def _rebuild(position, orientation, weight, position_only, enabled, priority=0) 
 
 
 def _position(value) -> np.ndarray:
+    x, y, z = _three_floats(value)
+    if not (abs(x) <= MAX_COORDINATE and abs(y) <= MAX_COORDINATE and abs(z) <= MAX_COORDINATE):  # NaN fails too
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+            raise TargetError(f"target position must be finite, got {[x, y, z]}")
+        raise TargetError(f"target position must be within {MAX_COORDINATE:g} m of the origin in x, y and z, "
+                          f"got {[x, y, z]}")
+    return np.frombuffer(_PACK3(x, y, z))  # a fresh read-only float64 array
+
+
+def _three_floats(value) -> tuple[float, float, float]:
+    """A position ``value`` (3,) as three Python floats, not yet checked for range."""
     if type(value) is np.ndarray and value.shape == (3,):
         xyz = value.tolist()
     else:
@@ -167,15 +178,9 @@ def _position(value) -> np.ndarray:
             raise TargetError(f"target position must have shape (3,), got {a.shape}")
         xyz = a.tolist()
     try:
-        x, y, z = float(xyz[0]), float(xyz[1]), float(xyz[2])
+        return float(xyz[0]), float(xyz[1]), float(xyz[2])
     except (TypeError, ValueError, OverflowError):
         raise TargetError(f"target position must be 3 numbers, got {show_value(value)}") from None
-    if not (abs(x) <= MAX_COORDINATE and abs(y) <= MAX_COORDINATE and abs(z) <= MAX_COORDINATE):  # NaN fails too
-        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
-            raise TargetError(f"target position must be finite, got {[x, y, z]}")
-        raise TargetError(f"target position must be within {MAX_COORDINATE:g} m of the origin in x, y and z, "
-                          f"got {[x, y, z]}")
-    return np.frombuffer(_PACK3(x, y, z))  # a fresh read-only float64 array
 
 
 def _priority(value) -> int:

@@ -121,6 +121,19 @@ def _predicted_gain(A, b, x):
     return gain
 
 
+@njit(cache=True, inline="always")
+def _stalls(settings, sc, taken, settled):
+    """True if a linearisation's step ends the phase: not taken, settled, or shorter than the stall tolerance."""
+    return not taken or settled or math.sqrt(np.sum(sc.x_solve * sc.x_solve)) < settings.stall_tolerance
+
+
+@njit(cache=True, inline="always")
+def _window_settled(settings, window_start, cost):
+    """True if the last :data:`SETTLE_WINDOW` linearisations lowered the error from ``window_start`` to ``cost``
+    by :data:`SETTLE_WINDOW_GAIN` (relative) or less."""
+    return settings.settle_tolerance > 0.0 and window_start - cost <= SETTLE_WINDOW_GAIN * window_start
+
+
 @njit(cache=True)
 def _phase(model, settings, targets, root, W, q, budget, ws, sc, counts):
     """Iterate on ``targets`` from ``q`` for at most ``budget`` linearisations; returns ``(status, cost)``.
@@ -146,10 +159,10 @@ def _phase(model, settings, targets, root, W, q, budget, ws, sc, counts):
                                                        pgs_stats)
         counts[0] += 1
         counts[1] += sweeps
-        if not taken or settled or math.sqrt(np.sum(sc.x_solve * sc.x_solve)) < settings.stall_tolerance:
+        if _stalls(settings, sc, taken, settled):
             return STALLED, cost
         if (it + 1) % SETTLE_WINDOW == 0:
-            if settings.settle_tolerance > 0.0 and window_start - cost <= SETTLE_WINDOW_GAIN * window_start:
+            if _window_settled(settings, window_start, cost):
                 return STALLED, cost
             window_start = cost
     return BUDGET_EXHAUSTED, cost
@@ -160,6 +173,30 @@ def _positions_only(targets):
     row_w = targets.row_weight.copy()
     row_w[:, 3:] = 0.0
     return TargetArrays(targets.position, targets.rotation, row_w)
+
+
+@njit(cache=True)
+def _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts, staged):
+    """Rounds of a positions-only phase (when ``staged``) then a full one, while a round stalls and lowers the
+    error by more than :data:`ROUND_GAIN`; ``q`` ends at the best pose unless converged. Returns the status."""
+    best_q = q.copy()
+    best = np.inf
+    status = BUDGET_EXHAUSTED
+    while True:
+        if staged:
+            share = max(1, int(math.ceil(POSITION_PHASE_SHARE * max_iterations)))
+            _phase(model, settings, _positions_only(targets), root, W, q,
+                   min(share, max_iterations - counts[0]), ws, sc, counts)
+        status, cost = _phase(model, settings, targets, root, W, q, max_iterations - counts[0], ws, sc, counts)
+        improved = cost < best * (1.0 - ROUND_GAIN)
+        if cost < best:
+            best = cost
+            best_q[:] = q
+        if status != STALLED or not staged or not improved or counts[0] >= max_iterations:
+            break
+    if status != CONVERGED:
+        q[:] = best_q
+    return status
 
 
 @njit(cache=True)
@@ -181,23 +218,7 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     counts = np.zeros(2, dtype=np.int64)
     _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
     staged = settings.positions_first and np.any((targets.row_weight[:, 3] > 0.0) & (ws.err[1] > STAGE_ANGLE))
-    best_q = q.copy()
-    best = np.inf
-    status = BUDGET_EXHAUSTED
-    while True:
-        if staged:
-            share = max(1, int(math.ceil(POSITION_PHASE_SHARE * max_iterations)))
-            _phase(model, settings, _positions_only(targets), root, W, q,
-                   min(share, max_iterations - counts[0]), ws, sc, counts)
-        status, cost = _phase(model, settings, targets, root, W, q, max_iterations - counts[0], ws, sc, counts)
-        improved = cost < best * (1.0 - ROUND_GAIN)
-        if cost < best:
-            best = cost
-            best_q[:] = q
-        if status != STALLED or not staged or not improved or counts[0] >= max_iterations:
-            break
-    if status != CONVERGED:
-        q[:] = best_q
+    status = _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts, staged)
     cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
     if _finish_errors(targets.row_weight, ws.err, settings.position_tolerance, settings.orientation_tolerance):
         status = CONVERGED

@@ -1,0 +1,212 @@
+"""How :meth:`gsik.solver.Solver.solve` spends its attempts: restarts, continuation, the settled best reach,
+and which attempt is best. A mixin of :class:`~gsik.solver.Solver`, which owns the state it works on."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from gsik import kernels
+from gsik.kernels import O_COST, O_ITERATIONS, O_STATUS, O_STEP_NORM, O_SWEEPS
+from gsik.kernels import solve as solve_kernels
+from gsik.result import _STATUSES, SolveResult, Status
+from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix
+from gsik.targets import Target
+
+#: Attempts ending with weighted errors this close (relative) found the same best reach ...
+SETTLED_AGREEMENT = 1e-3
+#: ... and this many further attempts finding it again settle it: the solve stops.
+SETTLED_REPEATS = 8
+
+
+class AttemptPolicy:
+    """:meth:`solve` and its attempts, for :class:`~gsik.solver.Solver`."""
+
+    def solve(self, targets: Mapping[str, Target | None] | None = None, q0=None) -> SolveResult:
+        """Solve to convergence (or best reach) from ``q0`` (default: the current angles).
+
+        Levenberg-Marquardt over PGS steps (:func:`gsik.kernels.step.solve`). If
+        that does not converge, up to ``settings.restarts`` more attempts:
+        first a continuation (the targets approached in stages from the
+        current effector poses), then random restarts inside the limits.
+        The best attempt (lowest weighted error) is kept and becomes the
+        solver's state. With priorities, posture or balance each attempt runs
+        prioritised steps until the pose holds (:mod:`gsik.control`),
+        attempts are compared level by level, and the first further attempt
+        starts from the posture; a converged attempt whose posture is not met
+        is compared with one from the posture too, as the targets may be met
+        on another branch nearer to it.
+        Each attempt (:func:`gsik.kernels.solve.solve`) meets the positions
+        first when an orientation is far off. Without priorities, posture or
+        balance the attempts stop early once the best reach is settled
+        (:data:`SETTLED_REPEATS` attempts end where the best one did, within
+        :data:`SETTLED_AGREEMENT`), and at once when a solve starts from the
+        best reach a previous solve settled on, with the same targets and
+        settings. The result counts the linearisations (``iterations``) and
+        sweeps of all attempts.
+        """
+        if targets is not None:
+            self.set_targets(targets)
+        if q0 is not None:
+            self.set_q(q0)
+        if self._settled is not None and self._settled[0] == self._reach_key():
+            return self._result(self._settled[1], O_COST, 1)  # nothing further can do better: no work
+        stats, attempts = self._attempts()
+        self._ws.x[:] = 0.0
+        self._ws.lam[0] = self._settings.damping
+        if self._is_controlled:
+            return self._control_result(_STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
+                                        float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
+        self._remember_settled(stats)
+        return self._result(stats, O_COST, attempts)
+
+    def _attempts(self) -> tuple[np.ndarray, int]:
+        """``(statistics of the best attempt, attempts made)``: the first attempt from the current angles, then
+        the further ones the settings and its outcome call for; the best one is left as the state."""
+        restarts = self._settings.restarts > 0
+        start = self._q.copy()
+        self._work_done[:] = 0
+        stats = self._solve_from(start)
+        attempts = 1
+        if stats[O_STATUS] != Status.CONVERGED and restarts:
+            stats, attempts = self._restart(start, stats)
+        elif restarts and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0:
+            stats, attempts = self._posture_attempt(stats)
+        stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
+        return stats, attempts
+
+    def _remember_settled(self, stats: np.ndarray) -> None:
+        """Keep a best reach (a stalled solve) so that the same solve again from it does no work."""
+        self._settled = None
+        if stats[O_STATUS] == Status.STALLED:
+            settled = stats.copy()
+            settled[O_ITERATIONS] = settled[O_SWEEPS] = 0
+            self._settled = (self._reach_key(), settled)
+
+    def _reach_key(self) -> tuple:
+        """What a solve's outcome depends on: settings, root and its pose, targets, start angles."""
+        t = self._packed
+        return (self._settings, self._topo.root_frame, self._W.tobytes(), t.position.tobytes(),
+                t.rotation.tobytes(), t.row_weight.tobytes(), self._q.tobytes())
+
+    def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
+        """Further attempts after a failed first one; leaves the best attempt as the state."""
+        best = (self._attempt_rank(stats), self._q.copy(), stats)
+        rng = np.random.default_rng(self._settings.seed)
+        attempts = 1
+        repeats = 0
+        while stats[O_STATUS] != Status.CONVERGED and attempts <= self._settings.restarts:
+            stats = self._further_attempt(attempts, start, rng)
+            attempts += 1
+            repeats += self._repeats_best(stats, best[2])
+            rank = self._attempt_rank(stats)
+            if stats[O_STATUS] == Status.CONVERGED or rank < best[0]:
+                best = (rank, self._q.copy(), stats)
+            if repeats >= SETTLED_REPEATS:
+                break  # attempts from other starts keep finding the same best reach: the best there is to find
+        if best[2] is not stats:
+            # An earlier attempt was best: make it the state again (frames and errors included).
+            self._solve_from(best[1], iterations=0)
+        return best[2], attempts
+
+    def _further_attempt(self, attempts: int, start: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Attempt ``attempts + 1``: from the posture or by continuation first, then random restarts."""
+        if attempts == 1 and self._posture is not None:
+            return self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
+        if attempts == 1:
+            return self._solve_by_continuation(start)
+        # Random restarts: ever bolder blends of the start with a random pose within the limits.
+        sk = self._skeleton
+        alpha = min(1.0, 0.25 * attempts)
+        return self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
+
+    def _repeats_best(self, stats: np.ndarray, best: np.ndarray) -> bool:
+        """True if an unconverged attempt ended where the best one did (``best`` before this attempt), within
+        :data:`SETTLED_AGREEMENT`; never with priorities, posture or balance."""
+        agrees = (not self._is_controlled
+                  and abs(stats[O_COST] - best[O_COST]) <= SETTLED_AGREEMENT * best[O_COST])
+        return agrees and stats[O_STATUS] != Status.CONVERGED
+
+    def _posture_attempt(self, stats: np.ndarray) -> tuple[np.ndarray, int]:
+        """A second attempt from the posture after a converged first one; the better one stays the state."""
+        first = (self._attempt_rank(stats), self._q.copy(), stats)
+        second = self._solve_from(self._posture.reference)
+        if second[O_STATUS] == Status.CONVERGED and self._attempt_rank(second) < first[0]:
+            return second, 2
+        self._solve_from(first[1], iterations=0)
+        return first[2], 2
+
+    def _attempt_rank(self, stats: np.ndarray) -> tuple:
+        """How good the attempt that just ended is (lower is better): its weighted error, or with
+        priorities its levels' errors in order, so no attempt is preferred for a lower level's sake."""
+        if self._is_controlled:
+            return self._make_controller().rank(self._q, self._ws.R, self._ws.p)
+        return (float(stats[O_COST]),)
+
+    def _solve_from(self, q0: np.ndarray, iterations: int | None = None) -> np.ndarray:
+        """One attempt from ``q0``; returns a copy of its statistics and adds its work to ``_work_done``."""
+        s = self._settings
+        if self._is_controlled:
+            stats = self._control_solve(q0, s.max_iterations if iterations is None else iterations)
+        else:
+            self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
+            before = self._q.copy()
+            solve_kernels.solve(self._model, s.kernel_settings(for_solve=True), self._packed,
+                                self._topo.root_frame, self._W, self._q,
+                                s.max_iterations if iterations is None else iterations, self._ws)
+            self._refuse_non_finite(before, self._ws.stats)
+            stats = self._ws.stats.copy()
+        self._work_done[0] += int(stats[O_ITERATIONS])
+        self._work_done[1] += int(stats[O_SWEEPS])
+        return stats
+
+    def _solve_by_continuation(self, q0: np.ndarray, stages: int = 4) -> np.ndarray:
+        """Approach the targets in ``stages`` from where the effectors are at ``q0``."""
+        tp, tR = self._packed.position, self._packed.rotation
+        final_p, final_R = tp.copy(), tR.copy()
+        self._q[:] = q0
+        self._refresh_frames()
+        start_p = self._ws.p[self._topo.effector_frame].copy()
+        start_R = self._ws.R[self._topo.effector_frame].copy()
+        try:
+            for k in range(1, stages):
+                a = k / stages
+                for i in range(len(final_p)):
+                    tp[i] = (1 - a) * start_p[i] + a * final_p[i]
+                    tR[i] = matrix_from_rotvec(a * rotvec_from_matrix(final_R[i] @ start_R[i].T)) @ start_R[i]
+                self._solve_from(self._q.copy())
+        finally:
+            tp[:], tR[:] = final_p, final_R
+        return self._solve_from(self._q.copy())
+
+    def _control_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
+        """One attempt of prioritised steps from ``q0`` until the pose holds; statistics as the kernel's solve."""
+        c = self._make_controller()
+        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
+        self._refresh_frames()
+        st, it = self._control_steps(c, iterations)
+        stats = np.zeros(kernels.N_STATS)
+        stats[O_STATUS] = self._control_status(c, st)
+        stats[O_ITERATIONS] = it if iterations else 0
+        stats[O_COST] = c.target_cost(self._ws.R, self._ws.p)
+        stats[O_STEP_NORM] = 0.0 if st is None else st.step_norm
+        return stats
+
+    def _control_steps(self, c, iterations: int) -> tuple:
+        """``(last step's ControlStats or None, steps made)``: at most ``iterations`` prioritised steps."""
+        lam = np.array([self._settings.damping])
+        settles = self._posture is not None or self._balance  # keep going after convergence until they hold
+        st = None
+        it = 0
+        for it in range(1, iterations + 1):
+            st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
+            if st.held or (st.converged and not settles):
+                break
+        return st, it
+
+    def _control_status(self, c, st) -> Status:
+        """How a prioritised attempt ended, given its last step ``st`` (None if it made none)."""
+        if c.converged(self._ws.R, self._ws.p):
+            return Status.CONVERGED
+        return Status.STALLED if st is not None and st.held else Status.BUDGET_EXHAUSTED
