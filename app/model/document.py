@@ -1,15 +1,13 @@
 """The document of gsik-studio: skeleton, solver, targets, undo history, file.
 
-Plain Python: no Qt, no PyVista. The :class:`Document` is the app's only door
-to the solver: the window and the viewport read typed read-outs from it
-(:meth:`Document.world_positions`, :attr:`Document.targets`, ...) and forward
+Plain Python: no Qt, no PyVista. The :class:`Document` is the app's only door to the solver: the window and the
+viewport read typed read-outs from it (:meth:`Document.world_positions`, :attr:`Document.targets`, ...) and forward
 input to its commands; it says what changed through :attr:`Document.events`.
 
-Every edit is a command on the :class:`History`. A command keeps the
-complete :class:`gsik.io.pose.Pose` from before the edit; when it is undone it
-also keeps the pose from just before the undo, so undo and redo restore
-angles, root and targets exactly, bit for bit (the solver keeps settling the
-pose between edits, and redo gives back the settled pose, not a guess).
+Every edit is a command on the :class:`History`. A command keeps the complete :class:`gsik.io.pose.Pose` from
+before the edit; when it is undone it also keeps the pose from just before the undo, so undo and redo restore
+angles, root and targets exactly, bit for bit (the solver keeps settling the pose between edits, and redo gives
+back the settled pose, not a guess).
 """
 
 from __future__ import annotations
