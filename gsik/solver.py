@@ -101,9 +101,9 @@ class Solver(AttemptPolicy):
         except (TypeError, ValueError, OverflowError):
             raise SolverError(f"world_from_root must be a (4, 4) transform, got {show_value(world_from_root)}") \
                 from None
-        if W.shape != (4, 4) or not np.all(np.isfinite(W)):
+        if W.shape != (4, 4) or not np.isfinite(W).all():
             raise SolverError(f"world_from_root must be a finite (4, 4) transform, got shape {W.shape}")
-        if np.max(np.abs(W[:3, 3])) > MAX_COORDINATE:
+        if max(map(abs, W[:3, 3].tolist())) > MAX_COORDINATE:  # plain floats: cheaper than NumPy for three values
             raise SolverError(f"world_from_root must place the root within {MAX_COORDINATE:g} m of the origin "
                               f"in x, y and z, got {W[:3, 3].tolist()}")
         return W
