@@ -137,14 +137,14 @@ class FileActions:
         motion = transfer.motion_on(self.doc.skeleton, imported.motion)
         if motion is None:  # another skeleton: a document of its own
             doc = transfer.document_for(imported.skeleton)
-            doc.timeline.load(imported.motion, name)
+            doc.timeline.load(imported.motion, name, f"Import {name}")
             window = self._open_document(doc)
             doc.timeline.play()
             self._message(f"Imported {name} on its own skeleton ({transfer.describe(imported.skeleton)})",
                           8000)
             return window
         self._stop_playback()
-        self.doc.timeline.load(motion, name)
+        self.doc.timeline.load(motion, name, f"Import {name}")
         self.doc.timeline.play()
         self._message(f"Imported {name}: {motion.n_frames} frames on the timeline", 8000)
         return True

@@ -40,6 +40,10 @@ def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Calla
     form.poles.toggled.connect(controls.set_poles)
     form.layout().addRow(form.poles)
 
+    def show_poles() -> None:  # undo, redo and opened files turn poles on or off too
+        with QtCore.QSignalBlocker(form.poles):
+            form.poles.setChecked(bool(controls.poles))
+
     def set_balance(on: bool) -> None:
         try:
             controls.set_balance(on)
@@ -51,4 +55,5 @@ def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Calla
     form.balance.toggled.connect(set_balance)
     form.show_com.toggled.connect(show_support)
     controls.changed.connect(form.show_model)
+    controls.changed.connect(show_poles)
     return form
