@@ -63,7 +63,7 @@ class Support(NamedTuple):
 
 
 class SolveControls:
-    """Posture strength and balance of a document's solver, its pole targets, and the centre of mass and support read-outs.
+    """Posture strength and balance of a document's solver, its pole targets, the centre of mass and support read-outs.
 
     Pole targets are position-only targets on knees and elbows at level
     :data:`POLE`: dragging one swings the limb's bend towards it without moving
@@ -125,7 +125,8 @@ class SolveControls:
         if joint not in self.poles:
             raise gsik.TargetError(f"no pole target on {joint!r}; poles: {', '.join(self.poles) or 'none (off)'}")
         moved = self._poles[joint].replace(position=position)
-        self._change(f"Move pole {joint}", {**self._poles, joint: moved}, None if drag is None else ("pole", joint, drag))
+        key = None if drag is None else ("pole", joint, drag)
+        self._change(f"Move pole {joint}", {**self._poles, joint: moved}, key)
 
     def pole_snapshot(self) -> tuple[tuple[str, Target], ...]:
         """Every pole target placed, enabled or not (the undo history and pose files keep it)."""

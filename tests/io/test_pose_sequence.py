@@ -1,4 +1,4 @@
-"""Pose files keeping keys, poles and a clip: exact round trips, files without them still read, bounded and clear errors."""
+"""Pose files with keys, poles and a clip: exact round trips, files without them still read, bounded, clear errors."""
 
 from __future__ import annotations
 
@@ -104,7 +104,8 @@ def _replace(text: str, old: str, new: str) -> str:
     ("      world_from_root: [[", "      world_from_root: [[true, ", r"clip.frames.0.world_from_root.0: must be a list "
                                                                       r"of 4 numbers"),
     ("      angles: [", "      angles: [1.0, ", r"clip.frames.0.angles: must be a list of 30 numbers"),
-    ("  frames:\n", "  frames: []\n  x:\n", r"clip.x: unknown field; valid fields: 'name', 'frame_time', 'dofs', 'frames'"),
+    ("  frames:\n", "  frames: []\n  x:\n",
+     r"clip.x: unknown field; valid fields: 'name', 'frame_time', 'dofs', 'frames'"),
 ])
 def test_errors_name_the_file_line_field_and_value(skeleton, everything, old, new, message):
     text = _replace(pose_to_yaml(_pose(skeleton, 0), **everything), old, new)

@@ -86,7 +86,7 @@ from gsik.io.pose.read import (PoseDocument, parse_pose, pose_from_document, pos
                                read_pose_document)
 from gsik.io.pose.write import pose_to_yaml, write_pose
 
-__all__ = ["LIMIT_TOLERANCE", "POSE_FORMAT", "QUATERNION_NORM_TOLERANCE", "SKELETON_FILE_SUFFIXES", "Clip", "KeySequence",
-           "Pole", "Pose", "PoseDocument",
+__all__ = ["LIMIT_TOLERANCE", "POSE_FORMAT", "QUATERNION_NORM_TOLERANCE", "SKELETON_FILE_SUFFIXES", "Clip",
+           "KeySequence", "Pole", "Pose", "PoseDocument",
            "PoseRead", "parse_pose", "pose_from_document", "pose_from_yaml", "pose_to_yaml", "read_pose",
            "read_pose_document", "write_pose"]

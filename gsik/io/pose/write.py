@@ -47,7 +47,7 @@ def pose_to_yaml(pose: Pose, library: Sequence[tuple[str, Pose]] = (), keys: Key
             bounded reader reads back (:data:`gsik.io.yaml_safe.MAX_CHARS`: a clip of too many frames).
     """
     out = [
-        "# gsik pose (format documented in gsik/pose.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
+        "# gsik pose (format: gsik/io/pose/__init__.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
         f"format: {POSE_FORMAT}",
         f"skeleton: {yaml_string(pose.skeleton)}",
         *_pose_lines(pose, ""),
@@ -93,7 +93,8 @@ def _check_skeletons(skeleton: str, keys: KeySequence | None, clip: Clip | None)
 
 
 def write_pose(path: str | os.PathLike, pose: Pose, library: Sequence[tuple[str, Pose]] = (),
-               keys: KeySequence | None = None, poles: Mapping[str, Pole] | None = None, clip: Clip | None = None) -> None:
+               keys: KeySequence | None = None, poles: Mapping[str, Pole] | None = None,
+               clip: Clip | None = None) -> None:
     """Write ``pose`` (and a ``library``, ``keys``, ``poles``, ``clip``, if any: see :func:`pose_to_yaml`) to
     ``path`` atomically (temporary file, fsync, rename).
 
