@@ -39,6 +39,7 @@ class PoleGizmos:
             self.widgets[name] = w
         viewport.layers.append(self)
         self.controls.changed.connect(self.sync)
+        self.sync()  # a document opened before the window may have poles on
 
     def _start(self, name: str) -> None:
         self.dragging, self._drag = name, object()

@@ -56,4 +56,5 @@ def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Calla
     form.show_com.toggled.connect(show_support)
     controls.changed.connect(form.show_model)
     controls.changed.connect(show_poles)
+    show_poles()  # a document opened before the window may have poles on
     return form

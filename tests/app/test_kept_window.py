@@ -128,3 +128,23 @@ def test_a_bad_keys_file_gets_one_dialog_and_changes_nothing(qtbot, window, boxe
     assert doc.pose() == before and doc.history.commands == history and doc.timeline.keys == {}
     assert doc.controls.pole_snapshot() == poles and window.balance_panel.poles.isChecked()
     assert doc.path != str(bad)
+
+
+def test_a_window_on_a_document_opened_with_poles_shows_them(qtbot, window, tmp_path):
+    from gsik_studio.model import Document
+
+    doc = Document()
+    doc.controls.set_poles(True)
+    doc.controls.move_pole("left_knee", doc.controls.poles["left_knee"].position + (0.25, -0.1, 0.0))
+    doc.save(tmp_path / "poles.yaml")
+    opened = Document()
+    opened.open(tmp_path / "poles.yaml")  # as `gsik-studio --screenshot out.png poles.yaml` does
+    other = window.open_document(opened)
+    try:
+        qtbot.waitExposed(other)
+        assert other.balance_panel.poles.isChecked()
+        assert all(w.GetEnabled() for w in other.poles.widgets.values())
+        np.testing.assert_allclose(_gizmo_at(other, "left_knee"), opened.controls.poles["left_knee"].position,
+                                   atol=1e-9)
+    finally:
+        other.close()
