@@ -17,8 +17,10 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, NamedTuple
 
+from gsik import validate
 from gsik.anim.motion import Motion
 from gsik.errors import GsikError
+from gsik.io.pose.sequence import MAX_SEQUENCE_FRAMES
 from gsik.io.pose import Pose
 from gsik.targets import Target
 from gsik_studio.model.events import Signal
@@ -169,14 +171,14 @@ class Timeline:
         """Key the document's pose at ``frame`` (default: the current frame); returns the frame. One undo step."""
         if self.clip is not None:
             raise GsikError(f"the timeline holds the clip {self.name!r}: discard it before keying poses")
-        f = self.frame if frame is None else self._check_frame(frame, allow_past_end=True)
+        f = self.frame if frame is None else self._check_frame(frame)
         self._change(f"Add key at frame {f}", keys=tuple(sorted({**self.keys, f: self.doc.pose()}.items())))
         return f
 
     def move_key(self, old: int, new: int) -> None:
         """Move the key at frame ``old`` to frame ``new`` (replacing a key there). One undo step."""
         pose = self._key(old)
-        new = self._check_frame(new, allow_past_end=True)
+        new = self._check_frame(new)
         if new != old:
             keys = {f: p for f, p in self.keys.items() if f != old}
             self._change(f"Move key {old} to {new}", keys=tuple(sorted({**keys, new: pose}.items())))
@@ -192,11 +194,10 @@ class Timeline:
             raise GsikError(f"no key at frame {frame}; keys at {sorted(self.keys) or 'no frame'}")
         return self.keys[frame]
 
-    def _check_frame(self, frame: int, allow_past_end: bool = False) -> int:
-        f = int(frame)
-        if f < 0 or (not allow_past_end and f >= self.n_frames):
-            raise GsikError(f"frame {frame} is outside the timeline (0 .. {self.n_frames - 1})")
-        return f
+    @staticmethod
+    def _check_frame(frame: int) -> int:
+        """A key's frame: a whole number below the bound pose files keep (past the timeline's end is fine)."""
+        return validate.whole(frame, "a key's frame", GsikError, floats=True, maximum=MAX_SEQUENCE_FRAMES - 1)
 
     # -- transport ------------------------------------------------------------------------
     def _open_session(self, text: str) -> Playback | None:

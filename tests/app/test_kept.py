@@ -198,3 +198,22 @@ def test_new_clears_keys_clip_and_poles(doc):
     doc.new()
     assert doc.timeline.keys == {} and doc.controls.poles == {} and doc.library.names == ()
     assert kept_state(doc) == kept_state(Document()) and "left_knee" not in doc.solver.targets
+
+
+@pytest.mark.parametrize("frame", [-1, 10**12, 2.5, float("nan"), "3", True])
+def test_a_key_at_a_frame_no_file_could_keep_is_refused_and_changes_nothing(doc, frame):
+    doc.timeline.add_key(0)
+    with pytest.raises(gsik.GsikError, match="a key's frame must be a whole number >= 0 and <= 99999"):
+        doc.timeline.add_key(frame)
+    with pytest.raises(gsik.GsikError, match="a key's frame must be a whole number"):
+        doc.timeline.move_key(0, frame)
+    assert sorted(doc.timeline.keys) == [0] and texts(doc) == ["Add key at frame 0"]
+
+
+@pytest.mark.parametrize("position", [[1e300, 0, 0], [float("nan")] * 3, "up", [0.1, 0.2]])
+def test_a_hostile_pole_position_is_refused_and_changes_nothing(doc, position):
+    doc.controls.set_poles(True)
+    poles = doc.controls.pole_snapshot()
+    with pytest.raises(gsik.GsikError):
+        doc.controls.move_pole("left_knee", position)
+    assert doc.controls.pole_snapshot() == poles and texts(doc) == ["Pole targets on"]
