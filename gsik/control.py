@@ -11,10 +11,17 @@ angles and solves the levels in strict order (:func:`gsik.priority.prioritized_s
 4. the preferred posture (when on).
 
 A step is kept only if it leaves every level no worse, in order: the first
-level it changes by more than ``settle_tolerance`` must improve (a level
-within its tolerances before and after counts as unchanged). Otherwise it is
-halved, then refused and the damping raised (Levenberg-Marquardt, as the fast
-path does), so a held target settles at its best reach instead of jittering.
+level it changes by more than ``settle_tolerance`` must improve. A level met
+(within half its tolerances) before and after may float inside that band
+while a lower level improves, but it never licenses a lower level to get
+worse: a met level's tightening counts only when every level below it is
+unchanged. Otherwise the step is halved, then refused and the damping raised
+(Levenberg-Marquardt, as the fast path does). Met levels take full
+Gauss-Newton steps (the base damping): they are constraints to stay on, and a
+damping raised for a lower level must not stop them closing in. A step that
+changes nothing, or is refused at the largest damping, holds the pose (as a
+refused step of the fast path does), and holding is remembered, so a held
+target settles at its best reach instead of jittering, and costs nothing.
 """
 
 from __future__ import annotations
@@ -33,6 +40,11 @@ from gsik.priority import Level, factor_level, posture_factor, prioritized_step
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
+#: Largest adaptive damping (the fast path's too): a step refused at it holds the pose.
+MAX_DAMPING = 1e6
+#: A met level's tightening counts only if it lowers the level's cost by more than errors of this fraction of
+#: the tolerances would cost: pins close in to far under their tolerance, then hold.
+TIGHTEN_FRACTION = 0.01
 #: Balance sits between the targets of priority 0 and those of priority 1 (arms pulled at 1 cannot tip the body).
 BALANCE_PRIORITY = 0.5
 #: The centre of mass is held this far [m] inside the support polygon's edge ...
@@ -123,7 +135,8 @@ class Controller:
         self._posture_factor = None if posture is None else posture_factor(posture.precision)
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
-        self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
+        self._state_cache = None  # (q, world_from_root, (costs, met, anchors)) of the last accepted pose
+        self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
         self._layout = None  # (effector names, result names, task index of each) for results
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
@@ -132,7 +145,6 @@ class Controller:
         self._topo = topology(skeleton, skeleton.root, names)
         self._task_model = _kinematics(skeleton, self._topo)
         self._fk_model = _kinematics(skeleton)
-        self.retarget(tasks)
         priorities = [t.priority for t in self._tasks]
         if balance is not None:
             priorities.append(BALANCE_PRIORITY)
@@ -140,6 +152,7 @@ class Controller:
         self._levels = sorted(set(priorities))
         self._task_level = np.array([self._levels.index(t.priority) for t in self._tasks], dtype=np.int64)
         self._balance_level = self._levels.index(BALANCE_PRIORITY) if balance is not None else -1
+        self.retarget(tasks)
         m = len(self._tasks)
         self._J = np.zeros((6 * m, skeleton.n_dofs))
         self._e = np.zeros(6 * m)
@@ -156,7 +169,19 @@ class Controller:
         self._tp = np.array([t.position for t in ordered]).reshape(-1, 3)
         self._tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
         self._row_w = np.array([t.row_weight for t in ordered]).reshape(-1, 6)
-        self._state_cache = None
+        self._floors = self._tighten_floors()
+        self._state_cache = self._held = None
+
+    def _tighten_floors(self) -> np.ndarray:
+        """Cost (L + 1,) of each level's errors at :data:`TIGHTEN_FRACTION` of the tolerances (the posture's 0)."""
+        s, w = self._settings, self._row_w
+        per_task = 0.5 * TIGHTEN_FRACTION ** 2 * (w[:, 0] * s.position_tolerance ** 2
+                                                  + w[:, 3] * s.orientation_tolerance ** 2)
+        floors = np.zeros(len(self._levels) + 1)
+        np.add.at(floors, self._task_level, per_task)
+        if self._balance is not None:
+            floors[self._balance_level] = 0.5 * (TIGHTEN_FRACTION * BALANCE_TOLERANCE) ** 2
+        return floors
 
     # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -261,30 +286,43 @@ class Controller:
         ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
         """
         s = self._settings
+        damping = lam[0] if s.adaptive_damping else s.damping
+        if self._holds(q, W, damping):
+            return self._held[3]  # the same step from the same pose: it would hold again
         cached = self._state_cache
         fresh = cached is not None and np.array_equal(cached[0], q) and np.array_equal(cached[1], W)
-        state0 = cached[2] if fresh else self._level_state(q, R, p)
-        damping = lam[0] if s.adaptive_damping else s.damping
+        state0 = cached[2] if fresh else _anchored(self._level_state(q, R, p))
         tries, (verdict, q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
-        accepted = verdict == "better" or not s.adaptive_damping
+        accepted = verdict[0] == "better" or not s.adaptive_damping
         if accepted:
             step_norm = float(np.linalg.norm(q2 - q))
             q[:], R[:], p[:] = q2, R2, p2
-            self._state_cache = (q.copy(), W.copy(), state)
+            decided = verdict[1] if verdict[0] == "better" else 0
+            self._state_cache = (q.copy(), W.copy(), _anchored(state, state0, decided))
         else:
             step_norm = 0.0
-        self._adapt_damping(lam, damping, verdict, accepted, tries)
-        held = s.adaptive_damping and (verdict == "same" or (accepted and step_norm <= s.stall_tolerance))
+        self._adapt_damping(lam, damping, verdict[0], accepted, tries)
+        # Held: nothing would change, or even the largest damping's step is refused (the fast path's stall).
+        held = s.adaptive_damping and (verdict[0] == "same" or (accepted and step_norm <= s.stall_tolerance)
+                                       or (not accepted and damping >= MAX_DAMPING))
         converged, cost = self._summary(R, p)
-        return ControlStats(accepted, held, converged, cost, step_norm)
+        stats = ControlStats(accepted, held, converged, cost, step_norm)
+        self._held = (q.copy(), W.copy(), lam[0], stats) if held and not accepted else None
+        return stats
+
+    def _holds(self, q, W, damping) -> bool:
+        """True if the last step held the pose ``q`` at ``W`` with this damping: a step now would do the same."""
+        held = self._held
+        return held is not None and held[2] == damping and np.array_equal(held[0], q) and np.array_equal(held[1], W)
 
     def _damped_trial(self, q, W, R, p, state0, damping) -> tuple[int, tuple]:
         """``(halvings made, trial)``: the prioritised step from ``q``, halved up to 3 times while its
         trial (:meth:`_trial`) is worse (with adaptive damping only)."""
-        dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), self._dampings(damping))
+        dampings = self._dampings(damping, state0[0])
+        dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), dampings)
         for tries in range(4):
-            trial = self._trial(q, q + dq, W, state0, damping)
-            if trial[0] != "worse" or not self._settings.adaptive_damping:
+            trial = self._trial(q, q + dq, W, state0, dampings)
+            if trial[0][0] != "worse" or not self._settings.adaptive_damping:
                 break
             dq = 0.5 * dq
         return tries, trial
@@ -295,14 +333,19 @@ class Controller:
         if accepted and s.adaptive_damping:
             lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
         elif not accepted and verdict == "worse":
-            lam[0] = min(damping * 10.0, 1e6)
+            lam[0] = min(damping * 10.0, MAX_DAMPING)
 
-    def _dampings(self, lam: float) -> np.ndarray:
-        """Damping per level: the adaptive one for the targets and balance, the fixed one for the
-        posture (its precision is well conditioned, and a raised damping would freeze it)."""
-        d = np.full(len(self._levels) + (self._posture is not None), lam)
+    def _dampings(self, lam: float, costs: np.ndarray) -> np.ndarray:
+        """Damping per level, given its ``costs`` (L + 1,): the base one for a level within its tolerances (its
+        linear model is good there: a small error is closed at once, whatever a lower level's trouble raised
+        ``lam`` to), ``lam`` for the others, and for the posture the base one raised as ``lam`` is (so a
+        posture move refused for its second-order cost shrinks)."""
+        base = self._settings.damping
+        L = len(self._levels)
+        near = costs[:L] <= self._floors[:L] / TIGHTEN_FRACTION ** 2
+        d = np.where(near, min(base, lam), lam)
         if self._posture is not None:
-            d[-1] = self._settings.damping
+            d = np.append(d, base * max(1.0, lam / base))
         return d
 
     def _box(self, q: np.ndarray, q_from: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -314,8 +357,8 @@ class Controller:
             hi = np.minimum(hi, q - q_from + s.max_step)
         return np.minimum(lo, 0.0), np.maximum(hi, 0.0)
 
-    def _trial(self, q, q_try, W, state0, damping):
-        """``(verdict, q, R, p, level state)`` of a trial pose. When a lower level's move breaks a met higher level
+    def _trial(self, q, q_try, W, state0, dampings):
+        """``((verdict, deciding level), q, R, p, level state)`` of a trial pose (:func:`_compare`). When a lower level's move breaks a met higher level
         (the null space is only flat to first order), up to :data:`RESTORING_STEPS` restoring steps of the target levels
         from the trial pose brings it back onto them, and that pose is judged instead."""
         sk = self._sk
@@ -323,17 +366,17 @@ class Controller:
         q2 = np.clip(q_try, sk.lower, sk.upper)
         self._frames(q2, W, R2, p2)
         state = self._level_state(q2, R2, p2)
-        verdict = _compare(state0, state, self._settings.settle_tolerance)
-        if verdict != "worse" or self._posture is None:
+        verdict = _compare(state0, state, self._settings.settle_tolerance, self._floors)
+        if verdict[0] != "worse" or self._posture is None:
             return verdict, q2, R2, p2, state
         q3, R3, p3 = q2.copy(), R2.copy(), p2.copy()
         for _ in range(RESTORING_STEPS):
             levels = self.levels(q3, R3, p3)[:-1]
-            q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), damping), sk.lower, sk.upper)
+            q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), dampings[:-1]), sk.lower, sk.upper)
             self._frames(q3, W, R3, p3)
             state3 = self._level_state(q3, R3, p3)
-            restored = _compare(state0, state3, self._settings.settle_tolerance)
-            if restored != "worse":
+            restored = _compare(state0, state3, self._settings.settle_tolerance, self._floors)
+            if restored[0] != "worse":
                 return restored, q3, R3, p3, state3
         return verdict, q2, R2, p2, state
 
@@ -418,17 +461,37 @@ def support(skeleton, targets, p: np.ndarray) -> Balance:
                    tuple(skeleton.soles[n] for n in feet))
 
 
-def _compare(before: tuple, after: tuple, settle: float) -> str:
-    """``"better"``, ``"worse"`` or ``"same"``: ``(costs, met)`` of the levels compared in order
-    (lexicographically); a level met before and after counts as unchanged."""
-    for c0, c1, met0, met1 in zip(before[0], after[0], before[1], after[1]):
+def _anchored(state: tuple, before: tuple | None = None, decided: int = 0) -> tuple:
+    """``(costs, met, anchors)``: ``state`` ``(costs, met)`` (L + 1,) with each level's anchor, the least cost it had
+    since a level above it (or itself, ``decided``) last improved; a level that only stays "the same" is held to
+    its anchor, so many small "same" losses never add up (that was a creep towards the posture)."""
+    costs, met = state[0], state[1]
+    anchors = costs.copy() if before is None else np.minimum(before[2], costs)
+    anchors[decided:] = costs[decided:]
+    return costs, met, anchors
+
+
+def _compare(before: tuple, after: tuple, settle: float, floors: np.ndarray) -> tuple[str, int]:
+    """``("better" | "worse" | "same", deciding level)``: ``before`` ``(costs, met, anchors)`` (:func:`_anchored`)
+    and ``after`` ``(costs, met)`` of the levels compared in order (lexicographically); a level may rise to
+    ``settle`` over its anchor and count as the same. Leaving a level's band is worse, entering it better. A level met before and after
+    counts as unchanged there, so a lower level may improve while it floats within its band; but its tightening (by more than its ``floors`` cost) makes
+    the step better only when no level below changes and no other met level loosens as much: a met
+    level's gain never pays for a lower level's loss (that was a wobble)."""
+    tightened = loosened = False
+    for k, (c0, a0, c1, met0, met1, floor) in enumerate(zip(before[0], before[2], after[0], before[1], after[1],
+                                                              floors)):
         if met0 and met1:
+            tightened = tightened or c1 < c0 - floor
+            loosened = loosened or c1 > c0 + floor
             continue
-        if c1 > c0 * (1.0 + settle) + 1e-300:
-            return "worse"
+        if met0 != met1:  # out of the band (at any cost: position and orientation errors trade in it) or into it
+            return ("better" if met1 else "worse"), k
+        if c1 > a0 * (1.0 + settle) + 1e-300:
+            return "worse", k
         if c1 < c0 * (1.0 - settle):
-            return "better"
-    return "same"
+            return "better", k
+    return ("better" if tightened and not loosened else "same"), len(floors)
 
 
 def _transform(R, p) -> np.ndarray:
