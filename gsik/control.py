@@ -34,7 +34,7 @@ from gsik.errors import SolverError
 from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
     support_polygon
 from gsik.kinematics import kinematic_model, topology
-from gsik.priority import Level, factor_level, posture_factor, prioritized_step
+from gsik.priority import Level, posture_factor, prioritized_step
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
@@ -131,6 +131,7 @@ class Controller:
         self._posture = posture
         # The posture's precision factored once (a learned prior's is a full matrix): each step only multiplies.
         self._posture_factor = None if posture is None else posture_factor(posture.precision)
+        self._posture_ones = np.ones(skeleton.n_dofs)
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
         self._state_cache = None  # (q, world_from_root, LevelState) of the last accepted pose
@@ -182,8 +183,15 @@ class Controller:
         tolerance = np.array([[s.position_tolerance], [s.orientation_tolerance]])
         self._tolerance = np.where(used, tolerance, np.inf)
         self._band = 0.5 * self._tolerance
+        L, m = len(self._levels), len(self._tasks)
         rows = np.repeat(self._task_level, 6)
-        self._level_rows = [np.flatnonzero((rows == k) & (w.reshape(-1) > 0.0)) for k in range(len(self._levels))]
+        self._level_rows = [np.flatnonzero((rows == k) & (w.reshape(-1) > 0.0)) for k in range(L)]
+        self._level_weights = [w.reshape(-1)[r] for r in self._level_rows]
+        # Sums per level as one product each: 0.5 w over each level's error rows, and its tasks' two error columns.
+        self._cost_rows = np.zeros((L + 1, 6 * m))
+        self._cost_rows[rows, np.arange(6 * m)] = 0.5 * w.reshape(-1)
+        self._band_rows = np.zeros((L + 1, 2 * m))
+        self._band_rows[np.tile(self._task_level, 2), np.arange(2 * m)] = 1.0
         per_task = 0.5 * TIGHTEN_FRACTION ** 2 * (w[:, 0] * s.position_tolerance ** 2
                                                   + w[:, 3] * s.orientation_tolerance ** 2)
         floors = np.bincount(self._task_level, per_task, minlength=len(self._levels) + 1)
@@ -227,13 +235,11 @@ class Controller:
         polygon's margin (within :data:`BALANCE_TOLERANCE`); the posture never is (it always compares by cost).
         """
         self._task_errors(R, p)
-        L = len(self._levels)
-        e = self._e.copy()
-        weighted = 0.5 * (self._row_w * (e * e).reshape(-1, 6)).sum(axis=1)
-        costs = np.bincount(self._task_level, weighted, minlength=L + 1)
-        err = self._err
-        met = np.bincount(self._task_level, (err > self._band).any(axis=0), minlength=L + 1) == 0
-        met[L] = False
+        e, err = self._e.copy(), self._err
+        costs = self._cost_rows @ (e * e)
+        target_cost = float(costs.sum())
+        met = self._band_rows @ (err > self._band).ravel() == 0.0
+        met[-1] = False
         if self._balance is not None:
             goal, com = self._support_goal(R, p)
             outside = max(signed_distance(goal, com[:2]), 0.0)
@@ -242,9 +248,9 @@ class Controller:
         if self._posture is not None:
             g = q - self._posture.reference
             P = self._posture.precision
-            costs[L] = 0.5 * float(g @ (P * g if P.ndim == 1 else P @ g))
+            costs[-1] = 0.5 * float(g @ (P * g if P.ndim == 1 else P @ g))
         converged = not (err > self._tolerance).any()
-        return LevelState(costs, met, costs, converged, float(weighted.sum()), e)
+        return LevelState(costs, met, costs, converged, target_cost, e)
 
     def rank(self, q, R, p) -> tuple:
         """The levels' costs in priority order (a met level counts 0): compare poses lexicographically."""
@@ -266,15 +272,11 @@ class Controller:
             self._task_errors(R, p)
             error = self._e
         _jacobian(self._task_model, R, p, self._J)
-        weights = self._row_w.reshape(-1)
-        out = []
-        for k, rows in enumerate(self._level_rows):
-            if k == self._balance_level:
-                out.append(self._balance_level_rows(R, p))
-                continue
-            out.append(Level(self._J[rows], error[rows], weights[rows]))
+        out = [self._balance_level_rows(R, p) if k == self._balance_level else Level(self._J[rows], error[rows], w)
+               for k, (rows, w) in enumerate(zip(self._level_rows, self._level_weights))]
         if self._posture is not None:
-            out.append(factor_level(q, self._posture.reference, self._posture_factor))
+            L = self._posture_factor  # factor_level's level, with its arrays made once
+            out.append(Level(L, L @ (self._posture.reference - q), self._posture_ones))
         return out
 
     def _balance_level_rows(self, R, p) -> Level:
