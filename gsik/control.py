@@ -99,7 +99,8 @@ class ControlStats(NamedTuple):
 
     Attributes:
         accepted: The step was kept.
-        held: No level would change by more than the settle tolerance: the pose is at rest.
+        held: The pose is at rest: no level would change by more than the settle tolerance, or even the
+            largest damping's step is refused (the studio's frame loop may idle).
         converged: Every target is within the position and orientation tolerances.
         cost: Weighted squared error ``0.5 e^T W e`` of the targets, all levels.
         step_norm: Size of the change of ``q`` [rad].
@@ -166,9 +167,13 @@ class Controller:
     def retarget(self, tasks) -> None:
         """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
         ordered = _ordered(tasks)
-        self._tp = np.array([t.position for t in ordered]).reshape(-1, 3)
-        self._tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
+        tp = np.array([t.position for t in ordered]).reshape(-1, 3)
+        tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
         row_w = np.array([t.row_weight for t in ordered]).reshape(-1, 6)
+        if self._row_w is not None and np.array_equal(tp, self._tp) and np.array_equal(tR, self._tR) \
+                and np.array_equal(row_w, self._row_w):
+            return  # the same targets again (a held drag): what the last steps learnt still holds
+        self._tp, self._tR = tp, tR
         if not np.array_equal(row_w, self._row_w):
             self._row_w = row_w
             self._thresholds()
