@@ -5,9 +5,9 @@ The levels come packed (:func:`gsik.priority.pack_levels`): every level's rows o
 (an orthonormal basis, one direction a row, ``Zt[z0:z0 + rz]`` live): the next basis is a row offset or one
 small product, never a copy of the transpose.
 
-Per level, a Householder QR with column pivoting of ``A^T = (J Z)^T`` (rz, m) gives the rank ``k``
-(pivots above ``rank_tol`` times the first), the row space of ``A`` (the first ``k`` columns of ``Q``) and
-the directions left free below (the other columns). The damped least-squares step in the row space is the
+Per level, a Householder QR with column pivoting of ``A^T = (J Z)^T`` (rz, m) gives the rank ``k`` (pivots
+above ``rank_tol`` times the level's largest row norm), the row space of ``A`` (the first ``k`` columns of
+``Q``) and the directions left free below (the other columns). The damped least-squares step in the row space is the
 ``k x k`` Cholesky solve ``(R_k R_k^T + damping I) y = R_k P^T r``, ``z = Q_k y``: the same step as the SVD's
 ``V_k diag(s / (s^2 + damping)) U_k^T r`` (both minimise ``|A z - r|^2 + damping |z|^2`` over the row space).
 """
@@ -22,7 +22,6 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels.pgs import _cholesky_solve
 
-_SQRT_EPS = math.sqrt(np.finfo(np.float64).eps)
 #: Status :func:`prioritized_step` returns: done, or a level's matrix held a non-finite number.
 OK, NOT_FINITE = 0, 1
 # A row's pivot norm^2 is downdated (one subtraction) until it has fallen below this fraction of its last exact value,
@@ -77,14 +76,16 @@ def make_work(n, m):
 
 
 @njit(cache=True)
-def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, dq):
+def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq):
     """Strict-priority damped least squares within ``lo <= dq <= hi``, into ``dq`` (n,) [rad].
 
     Args:
         rows: (M, n) every level's Jacobian rows, level by level. errors, weights: (M,) their errors and
             weights (>= 0). starts: (L + 1,) int64, level ``l`` is rows ``starts[l]:starts[l + 1]``.
         dampings: (L,) each level's damping. lo, hi: (n,) the box, ``lo <= 0 <= hi``.
-        rank_tol: Pivots below this fraction of a level's first are rank-deficient directions.
+        rank_tol: Pivots below this fraction of a level's largest weighted row norm are rank-deficient directions.
+        box_tol, box_rel_tol: A step leaving the box by no more than ``box_tol`` [rad] plus ``box_rel_tol`` times its
+            largest component does not block (rounding; clipped).
         dq: (n,) out: the step.
 
     Returns:
@@ -105,9 +106,11 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
         if rz == 0:
             break
         m = _weigh(rows, errors, weights, starts[lv], starts[lv + 1], wk.Jw, wk.ew)
-        if not _project(wk.Jw, m, wk.Zt, z0, rz, identity, wk.A0):
+        scale = _project(wk.Jw, m, wk.Zt, z0, rz, identity, wk.A0)
+        if not math.isfinite(scale):
             return NOT_FINITE
-        z0, rz, identity = _solve_level(wk, m, z0, rz, identity, dq, lo, hi, dampings[lv], rank_tol, lv < last)
+        z0, rz, identity = _solve_level(wk, m, z0, rz, identity, dq, lo, hi, dampings[lv], rank_tol * scale, box_tol,
+                                        box_rel_tol, lv < last)
     for d in range(n):
         dq[d] = min(max(dq[d], lo[d]), hi[d])  # rounding only: the loop keeps dq in the box
     return OK
@@ -126,26 +129,30 @@ def _weigh(rows, errors, weights, start, stop, Jw, ew):
 
 @njit(cache=True)
 def _project(Jw, m, Zt, z0, rz, identity, A0):
-    """``A0 = J Z`` (m, rz); False if it holds a non-finite number."""
+    """``A0 = J Z`` (m, rz); returns the largest row norm of ``J`` (not finite if ``A0`` or ``J`` holds a non-finite
+    number)."""
     n = Jw.shape[1]
     total = 0.0
+    scale = 0.0
     for i in range(m):
         for c in range(rz):
             A0[i, c] = Jw[i, c] if identity else _dot(Jw, i, Zt, z0 + c, 0, n)
         total += _dot(A0, i, A0, i, 0, rz)
-    return math.isfinite(total)
+        scale = max(scale, _dot(Jw, i, Jw, i, 0, n))
+    return math.sqrt(scale) if math.isfinite(total) else math.nan
 
 
 @njit(cache=True)
-def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, rank_tol, basis_needed):
+def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_tol, box_rel_tol, basis_needed):
     """One level's active-set loop on ``dq`` (and ``wk.locked``); returns the free basis left below it
     ``(z0, rz, identity)`` (only when ``basis_needed``: else as it stood)."""
     n = dq.shape[0]
     while True:
-        k = _factor(wk, m, rz, dq, rank_tol)
+        _into_box(dq, lo, hi, box_tol)
+        k = _factor(wk, m, rz, dq, pivot_tol)
         k = _damped_solve(wk, m, k, damping)
         _step_from(wk, k, rz, z0, identity)
-        alpha, blocking = _largest_fraction(dq, wk.step, lo, hi)
+        alpha, blocking = _largest_fraction(dq, wk.step, lo, hi, box_tol, box_rel_tol)
         if blocking < 0:
             for d in range(n):
                 dq[d] += wk.step[d]
@@ -231,11 +238,12 @@ def _identity_into(Zt, n):
 
 
 @njit(cache=True)
-def _factor(wk, m, rz, dq, rank_tol):
+def _factor(wk, m, rz, dq, pivot_tol):
     """The pivoted QR of ``A^T`` (``A = wk.A0``) into ``wk.A``, and the residual ``r = e - J dq`` into ``wk.res``.
 
     Afterwards the rows of ``A`` and ``res`` are in pivot order, ``A[c, i]`` (``i < k``, ``i <= c``) is
-    ``R[i, c]``, and reflection ``j`` is ``I - beta[j] v v^T`` with ``v = V[j, j:rz]``. Returns the rank ``k``.
+    ``R[i, c]``, and reflection ``j`` is ``I - beta[j] v v^T`` with ``v = V[j, j:rz]``. Returns the rank ``k``: the
+    pivots above ``pivot_tol``.
     """
     A, res, norm2, exact = wk.A, wk.res, wk.norm2, wk.norm2_exact
     for i in range(m):
@@ -243,15 +251,12 @@ def _factor(wk, m, rz, dq, rank_tol):
         for c in range(rz):
             A[i, c] = wk.A0[i, c]
         norm2[i] = exact[i] = _dot(A, i, A, i, 0, rz)
-    first = 0.0
     for j in range(min(m, rz)):
         p = j
         for c in range(j + 1, m):
             if norm2[c] > norm2[p]:
                 p = c
-        if j == 0:
-            first = math.sqrt(norm2[p])
-        if not math.sqrt(norm2[p]) > rank_tol * first:
+        if not math.sqrt(norm2[p]) > pivot_tol:
             return j
         if p != j:
             for i in range(rz):
@@ -326,13 +331,31 @@ def _step_from(wk, k, rz, z0, identity):
 
 
 @njit(cache=True)
-def _largest_fraction(dq, step, lo, hi):
-    """The largest ``alpha <= 1`` keeping ``dq + alpha * step`` in the box, and the DOF that blocks (-1: none)."""
+def _into_box(dq, lo, hi, box_tol):
+    """``dq`` clipped into the box and put on a bound where within ``box_tol`` of it (rounding only: every DOF on a
+    bound then has room 0 exactly, and ties go by index, not by rounding)."""
+    for d in range(dq.shape[0]):
+        v = min(max(dq[d], lo[d]), hi[d])
+        if v - lo[d] <= box_tol:
+            v = lo[d]
+        if hi[d] - v <= box_tol:
+            v = hi[d]
+        dq[d] = v
+
+
+@njit(cache=True)
+def _largest_fraction(dq, step, lo, hi, box_tol, box_rel_tol):
+    """The largest ``alpha <= 1`` keeping ``dq + alpha * step`` in the box (widened by ``box_tol`` and ``box_rel_tol``
+    times the step's largest component), and the DOF that blocks (-1: none)."""
+    size = 0.0
+    for d in range(dq.shape[0]):
+        size = max(size, abs(step[d]))
+    tol = box_tol + box_rel_tol * size
     best = math.inf
     blocking = -1
     for d in range(dq.shape[0]):
         over = dq[d] + step[d]
-        if over > hi[d] or over < lo[d]:
+        if over > hi[d] + tol or over < lo[d] - tol:
             room = ((hi[d] if step[d] > 0.0 else lo[d]) - dq[d]) / step[d]
             if room < best:
                 best = room
