@@ -97,7 +97,7 @@ class AttemptPolicy:
         attempts = 1
         repeats = 0
         while stats[O_STATUS] != Status.CONVERGED and attempts <= self._settings.restarts:
-            stats = self._further_attempt(attempts, start, rng)
+            stats = self._further_attempt(attempts, start, rng, best[1])
             attempts += 1
             repeats += self._repeats_best(stats, best[2])
             rank = self._attempt_rank(stats)
@@ -110,14 +110,23 @@ class AttemptPolicy:
             self._solve_from(best[1], iterations=0)
         return best[2], attempts
 
-    def _further_attempt(self, attempts: int, start: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Attempt ``attempts + 1``: from the posture or by continuation first, then random restarts."""
+    def _further_attempt(self, attempts: int, start: np.ndarray, rng: np.random.Generator,
+                         best_q: np.ndarray) -> np.ndarray:
+        """Attempt ``attempts + 1``: from the posture or by continuation first, then from the best pose so far
+        ``best_q`` (n_dofs,) [rad] with the DOFs it holds on a limit mirrored, then random restarts."""
         if attempts == 1 and self._posture is not None:
             return self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
         if attempts == 1:
             return self._solve_by_continuation(start)
-        # Random restarts: ever bolder blends of the start with a random pose within the limits.
         sk = self._skeleton
+        held = (best_q <= sk.lower) | (best_q >= sk.upper)
+        if attempts == 2 and held.any():
+            # Descent can end a few mm off with a joint held on its limits, the target's pose lying on the far
+            # side of their range (measured: the one pose of bench_reach's 1000 no restart reached ends 3.7 mm
+            # off with the right shoulder's x and z on a limit each, the target's near the other ends). Start
+            # again with those DOFs mirrored in their range, the rest where they meet their targets.
+            return self._solve_from(np.where(held, sk.lower + sk.upper - best_q, best_q))
+        # Random restarts: ever bolder blends of the start with a random pose within the limits.
         alpha = min(1.0, 0.25 * attempts)
         return self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
 

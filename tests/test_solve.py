@@ -134,3 +134,14 @@ def test_paper_settings_name_the_paper_method_for_a_solve():
     paper = gsik.SolverSettings.paper()
     assert not (paper.adaptive_damping or paper.subspace_minimization or paper.positions_first)
     assert paper.max_step == paper.solve_max_step == paper.settle_tolerance == 0.0
+
+
+def test_a_reach_held_on_joint_limits_is_escaped_by_mirroring_them(biped):
+    # Pose 857 of bench_reach's set: every attempt from the rest pose, continuation and random restarts alike,
+    # ended 3.7 mm off with the right shoulder's x and z each on a limit (the target's near the other ends).
+    rng = np.random.default_rng(1)
+    q_target = [random_q(biped, rng) for _ in range(858)][-1]
+    solver = gsik.Solver(biped)
+    r = solver.solve(targets_at(biped, q_target, solver.world_from_root), q0=biped.rest)
+    assert r.status is Status.CONVERGED
+    assert r.max_position_error < 1e-3 and r.max_orientation_error < np.radians(1.0)
