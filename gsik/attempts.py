@@ -8,7 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from gsik import kernels
-from gsik.kernels import O_COST, O_ITERATIONS, O_STATUS, O_STEP_NORM, O_SWEEPS
+from gsik.kernels import O_COST, O_FINITE, O_ITERATIONS, O_STATUS, O_STEP_NORM, O_SWEEPS
 from gsik.kernels import solve as solve_kernels
 from gsik.result import _STATUSES, SolveResult, Status
 from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix
@@ -164,7 +164,8 @@ class AttemptPolicy:
             solve_kernels.solve(self._model, s.kernel_settings(for_solve=True), self._packed,
                                 self._topo.root_frame, self._W, self._q,
                                 s.max_iterations if iterations is None else iterations, self._ws)
-            self._refuse_non_finite(before, self._ws.stats)
+            if not self._ws.stats[O_FINITE]:
+                self._refuse_non_finite(before, self._ws.stats)
             stats = self._ws.stats.copy()
         self._work_done[0] += int(stats[O_ITERATIONS])
         self._work_done[1] += int(stats[O_SWEEPS])

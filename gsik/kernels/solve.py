@@ -20,11 +20,11 @@ import math
 import numpy as np
 
 from gsik._jit import njit
-from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_ITERATIONS, O_STATUS, O_STEP_NORM,
-                          O_SWEEPS, STALLED, TargetArrays, make_scratch)
+from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_FINITE, O_ITERATIONS, O_STATUS,
+                          O_STEP_NORM, O_SWEEPS, STALLED, TargetArrays, make_scratch)
 from gsik.kernels.kinematics import linear_system
 from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
-from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors
+from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors, _finite
 
 #: Share of an attempt's linearisations the positions-only phase may use.
 POSITION_PHASE_SHARE = 0.3
@@ -212,7 +212,7 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     (see the module's docstring); the best pose is kept. Sets
     ``ws.stats[O_STATUS]`` (converged; stalled: a best reach; budget
     exhausted), ``O_ITERATIONS`` (linearisations), ``O_SWEEPS``, ``O_COST``,
-    ``O_STEP_NORM``. ``settings.sweeps`` are the sweeps per linearisation.
+    ``O_STEP_NORM``, ``O_FINITE``. ``settings.sweeps`` are the sweeps per linearisation.
     """
     sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], True)
     counts = np.zeros(2, dtype=np.int64)
@@ -228,3 +228,4 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     st[O_SWEEPS] = counts[1]
     st[O_COST] = cost
     st[O_STEP_NORM] = math.sqrt(np.sum(sc.x_solve * sc.x_solve))
+    st[O_FINITE] = _finite(q, ws.err, targets.row_weight)
