@@ -3,11 +3,12 @@ and which attempt is best. A mixin of :class:`~gsik.solver.Solver`, which owns t
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
 
-from gsik import kernels
+from gsik import control, kernels
 from gsik.kernels import O_COST, O_FINITE, O_ITERATIONS, O_STATUS, O_STEP_NORM, O_SWEEPS
 from gsik.kernels import solve as solve_kernels
 from gsik.result import _STATUSES, SolveResult, Status
@@ -18,6 +19,8 @@ from gsik.targets import Target
 SETTLED_AGREEMENT = 1e-3
 #: ... and this many further attempts finding it again settle it: the solve stops.
 SETTLED_REPEATS = 8
+#: Row weights' mask of a positions-only phase: the orientation rows off.
+_POSITION_ROWS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 
 
 class AttemptPolicy:
@@ -37,28 +40,34 @@ class AttemptPolicy:
         starts from the posture; a converged attempt whose posture is not met
         is compared with one from the posture too, as the targets may be met
         on another branch nearer to it.
-        Each attempt (:func:`gsik.kernels.solve.solve`) meets the positions
-        first when an orientation is far off. Without priorities, posture or
-        balance the attempts stop early once the best reach is settled
+        Each attempt (:func:`gsik.kernels.solve.solve`, or prioritised steps)
+        meets the positions first when an orientation is far off
+        (``positions_first``). Without priorities, posture or balance the
+        attempts stop early once the best reach is settled
         (:data:`SETTLED_REPEATS` attempts end where the best one did, within
-        :data:`SETTLED_AGREEMENT`), and at once when a solve starts from the
-        best reach a previous solve settled on, with the same targets and
-        settings. The result counts the linearisations (``iterations``) and
-        sweeps of all attempts.
+        :data:`SETTLED_AGREEMENT`). A solve that starts from the best reach a
+        previous solve settled on, with the same targets (priorities
+        included), posture, balance and settings, returns it at once. The
+        result counts the linearisations (``iterations``) and sweeps of all
+        attempts.
         """
         if targets is not None:
             self.set_targets(targets)
         if q0 is not None:
             self.set_q(q0)
         if self._settled is not None and self._settled[0] == self._reach_key():
-            return self._result(self._settled[1], O_COST, 1)  # nothing further can do better: no work
+            return self._solve_result(self._settled[1], 1)  # nothing further can do better: no work
         stats, attempts = self._attempts()
         self._ws.x[:] = 0.0
         self._ws.lam[0] = self._settings.damping
+        self._remember_settled(stats)
+        return self._solve_result(stats, attempts)
+
+    def _solve_result(self, stats: np.ndarray, attempts: int) -> SolveResult:
+        """The result of a solve whose best attempt's statistics are ``stats``."""
         if self._is_controlled:
             return self._control_result(_STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
                                         float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
-        self._remember_settled(stats)
         return self._result(stats, O_COST, attempts)
 
     def _attempts(self) -> tuple[np.ndarray, int]:
@@ -85,10 +94,12 @@ class AttemptPolicy:
             self._settled = (self._reach_key(), settled)
 
     def _reach_key(self) -> tuple:
-        """What a solve's outcome depends on: settings, root and its pose, targets, start angles."""
-        t = self._packed
-        return (self._settings, self._topo.root_frame, self._W.tobytes(), t.position.tobytes(),
-                t.rotation.tobytes(), t.row_weight.tobytes(), self._q.tobytes())
+        """What a solve's outcome depends on: settings, root and its pose, targets (with their priorities),
+        posture, balance, start angles."""
+        posture = None if self._posture is None else (self._posture.reference.tobytes(),
+                                                      self._posture.precision.tobytes())
+        return (self._settings, self._topo.root_frame, self._W.tobytes(), tuple(self._targets.items()), posture,
+                self._balance, self._q.tobytes())
 
     def _restart(self, start: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, int]:
         """Further attempts after a failed first one; leaves the best attempt as the state."""
@@ -195,13 +206,30 @@ class AttemptPolicy:
         c = self._make_controller()
         self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
         self._refresh_frames()
-        st, it = self._control_steps(c, iterations)
+        first = self._control_positions_first(c, iterations)
+        st, it = self._control_steps(c, iterations - first)
+        it += first
         stats = np.zeros(kernels.N_STATS)
         stats[O_STATUS] = self._control_status(c, st)
         stats[O_ITERATIONS] = it if iterations else 0
         stats[O_COST] = c.target_cost(self._ws.R, self._ws.p)
         stats[O_STEP_NORM] = 0.0 if st is None else st.step_norm
         return stats
+
+    def _control_positions_first(self, c, iterations: int) -> int:
+        """With ``positions_first`` and an orientation target off by more than
+        :data:`~gsik.kernels.solve.STAGE_ANGLE`, prioritised steps on the positions alone (every level's
+        orientation rows off), as a plain attempt's first phase, for at most
+        :data:`~gsik.kernels.solve.POSITION_PHASE_SHARE` of ``iterations``; returns the steps made."""
+        if not (self._settings.positions_first and iterations) or \
+                c.errors(self._ws.R, self._ws.p)[1].max(initial=0.0) <= solve_kernels.STAGE_ANGLE:
+            return 0
+        tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)
+        c.retarget([t._replace(row_weight=t.row_weight * _POSITION_ROWS) for t in tasks])
+        try:
+            return self._control_steps(c, math.ceil(solve_kernels.POSITION_PHASE_SHARE * iterations))[1]
+        finally:
+            c.retarget(tasks)
 
     def _control_steps(self, c, iterations: int) -> tuple:
         """``(last step's ControlStats or None, steps made)``: at most ``iterations`` prioritised steps."""

@@ -300,8 +300,7 @@ class Solver(AttemptPolicy):
             self._refresh_frames()
             return self._control_result(Status.REFUSED, 1, math.inf, 0.0, 1)
         step, inputs = self._inputs or self._kernel_inputs()
-        step(*inputs)
-        if not self._ws.stats[O_FINITE]:  # the kernel did not take the step: the angles are the last finite ones
+        if not step(*inputs):  # stats[O_FINITE] 0: the kernel did not take the step, the angles are the last finite
             self._refuse_non_finite(None, self._ws.stats)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
 

@@ -145,3 +145,48 @@ def test_a_reach_held_on_joint_limits_is_escaped_by_mirroring_them(biped):
     r = solver.solve(targets_at(biped, q_target, solver.world_from_root), q0=biped.rest)
     assert r.status is Status.CONVERGED
     assert r.max_position_error < 1e-3 and r.max_orientation_error < np.radians(1.0)
+
+
+def prioritised(targets):
+    """The same targets, the hands one level below the rest."""
+    return {n: t.replace(priority=1) if n.endswith("hand") else t for n, t in targets.items()}
+
+
+def test_positions_first_reaches_a_prioritised_solve(biped):
+    rng = np.random.default_rng(3)
+    W = gsik.Solver(biped).world_from_root
+    problems = [prioritised(targets_at(biped, random_q(biped, rng), W)) for _ in range(3)]
+
+    def outcomes(**extra):
+        solver = gsik.Solver(biped, restarts=0, max_iterations=60, **extra)
+        return [solver.solve(t, q0=biped.rest) for t in problems]
+
+    a, b = outcomes(), outcomes(positions_first=False)
+    assert any(x.iterations != y.iterations or not np.array_equal(x.q, y.q) for x, y in zip(a, b))
+
+
+def test_a_held_prioritised_unreachable_target_settles_then_costs_nothing(biped):
+    solver = gsik.Solver(biped)
+    targets = prioritised(unreachable_targets(solver))
+    first = solver.solve(targets)
+    assert first.status is Status.STALLED and first.iterations > 0
+    again = solver.solve(targets)
+    assert again.status is Status.STALLED
+    assert (again.attempts, again.iterations, again.sweeps) == (1, 0, 0)
+    np.testing.assert_array_equal(again.q, first.q)
+    np.testing.assert_array_equal(again.position_errors, first.position_errors)
+    assert again.effector_names == first.effector_names and again.residual == first.residual
+
+
+def test_a_settled_reach_is_forgotten_when_priorities_posture_or_balance_change(biped):
+    solver = gsik.Solver(biped, restarts=1)
+    targets = unreachable_targets(solver)
+    solver.solve(targets)
+    assert solver.solve(prioritised(targets)).iterations > 0  # the same values on two levels: another problem
+    solver.solve(targets)
+    solver.set_posture()
+    assert solver.solve(targets).iterations > 0  # a posture to meet too
+    solver.set_posture(weights=0.0)
+    solver.solve(targets)
+    solver.set_balance(True)
+    assert solver.solve(targets).iterations > 0  # balance to hold too

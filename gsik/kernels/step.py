@@ -153,15 +153,17 @@ def step(model, settings, targets, root, W, q, ws):
     errors. ``ws.x`` (n_dofs,) carries the previous frame's step in (the warm
     start) and this frame's step out; ``ws.lam`` the adaptive damping.
     A step that would leave a non-finite angle or error is not taken and
-    ``ws.stats[O_FINITE]`` is 0.0 (else 1.0).
+    ``ws.stats[O_FINITE]`` is 0.0 (else 1.0); returns the same as a bool,
+    which a caller from Python reads for less than an array element.
     """
     sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], False)
     cost0 = effector_errors(ws.R, ws.p, model.effector_frame, targets.position, targets.rotation,
                             targets.row_weight, sc.e, ws.err, sc.M)
     sc.err_new[:, :] = ws.err
     if _finish_errors(targets.row_weight, sc.err_new, settings.position_tolerance, settings.orientation_tolerance):
-        _idle(ws, sc, cost0, _finite(q, sc.err_new, targets.row_weight))
-        return
+        finite = _finite(q, sc.err_new, targets.row_weight)
+        _idle(ws, sc, cost0, finite)
+        return finite
     linear_system(model, ws.R, ws.p, sc.e, targets.row_weight, sc.A, sc.b, sc.v)
     lam = ws.lam[0] if settings.adaptive_damping else settings.damping
     _step_solve(model, settings, q, lam, ws, sc)
@@ -179,6 +181,7 @@ def step(model, settings, targets, root, W, q, ws):
         ws.err[:, :] = sc.err_new
     _step_stats(settings, targets, ws, cost, accepted)
     ws.stats[O_FINITE] = finite
+    return finite
 
 
 @njit(cache=True, inline="always")
