@@ -19,6 +19,11 @@ from gsik.targets import Target
 SETTLED_AGREEMENT = 1e-3
 #: ... and this many further attempts finding it again settle it: the solve stops.
 SETTLED_REPEATS = 8
+#: ... or this many, when no pose can meet the targets (:meth:`AttemptPolicy._out_of_reach`): no attempt can
+#: converge, so the attempts only look for a lower best reach. Measured on 40 such target sets (a hand or the
+#: head 2.5-4 m from the pelvis): 1 makes 5.8 attempts instead of 19.6, the best reach's weighted error within
+#: 1% of the full search's in 35 of 40 (at most 9% above); 2 makes 9.4 attempts, within 1% in 39 (2.3% above).
+OUT_OF_REACH_REPEATS = 1
 #: Row weights' mask of a positions-only phase: the orientation rows off.
 _POSITION_ROWS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 
@@ -107,6 +112,7 @@ class AttemptPolicy:
         rng = np.random.default_rng(self._settings.seed)
         attempts = 1
         repeats = 0
+        settle_after = OUT_OF_REACH_REPEATS if self._out_of_reach() else SETTLED_REPEATS
         while stats[O_STATUS] != Status.CONVERGED and attempts <= self._settings.restarts:
             stats = self._further_attempt(attempts, start, rng, best[1])
             attempts += 1
@@ -114,12 +120,23 @@ class AttemptPolicy:
             rank = self._attempt_rank(stats)
             if stats[O_STATUS] == Status.CONVERGED or rank < best[0]:
                 best = (rank, self._q.copy(), stats)
-            if repeats >= SETTLED_REPEATS:
+            if repeats >= settle_after:
                 break  # attempts from other starts keep finding the same best reach: the best there is to find
         if best[2] is not stats:
             # An earlier attempt was best: make it the state again (frames and errors included).
             self._solve_from(best[1], iterations=0)
         return best[2], attempts
+
+    def _out_of_reach(self) -> bool:
+        """True if no pose meets the targets: two targeted frames (or one and the pinned root) are farther apart
+        than the bones between them reach (:attr:`~gsik.Skeleton.chain_length`), by more than twice the
+        position tolerance."""
+        sk = self._skeleton
+        aimed = [(sk.frame_of(n), t.position) for n, t in self._targets.items() if t.weight > 0.0]
+        frames = np.array([self._topo.root_frame] + [f for f, _ in aimed])
+        points = np.array([self._W[:3, 3]] + [p for _, p in aimed])
+        apart = np.linalg.norm(points[:, None, :] - points[None, :, :], axis=2)
+        return bool(np.any(apart - sk.chain_length[np.ix_(frames, frames)] > 2.0 * self._settings.position_tolerance))
 
     def _further_attempt(self, attempts: int, start: np.ndarray, rng: np.random.Generator,
                          best_q: np.ndarray) -> np.ndarray:

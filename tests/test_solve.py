@@ -190,3 +190,19 @@ def test_a_settled_reach_is_forgotten_when_priorities_posture_or_balance_change(
     solver.solve(targets)
     solver.set_balance(True)
     assert solver.solve(targets).iterations > 0  # balance to hold too
+
+
+def test_targets_no_pose_meets_settle_on_the_first_attempt_that_finds_the_best_reach_again(biped):
+    solver = gsik.Solver(biped)
+    r = solver.solve(unreachable_targets(solver))  # the first solve of a new unreachable target
+    assert r.status is Status.STALLED
+    assert r.attempts <= 1 + gsik.attempts.OUT_OF_REACH_REPEATS < 1 + gsik.attempts.SETTLED_REPEATS
+
+
+def test_reachable_targets_are_never_taken_for_out_of_reach(biped, rng):
+    solver = gsik.Solver(biped)
+    for _ in range(20):
+        solver.set_targets(targets_at(biped, random_q(biped, rng), solver.world_from_root))
+        assert not solver._out_of_reach()
+    solver.set_targets(unreachable_targets(solver))
+    assert solver._out_of_reach()
