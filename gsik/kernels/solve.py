@@ -28,6 +28,8 @@ from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors, 
 
 #: Share of an attempt's linearisations the positions-only phase may use.
 POSITION_PHASE_SHARE = 0.3
+#: The positions-only phase ends once every position is within this [m] (or the tolerance, if coarser).
+POSITION_PHASE_TOLERANCE = 0.03
 #: Positions go first only when some orientation is this far from its target [rad]: near a solution (tracking,
 #: small drags) the full problem is already well linearised, and the extra phase would double the work.
 STAGE_ANGLE = 0.5
@@ -176,18 +178,20 @@ def _positions_only(targets):
 
 
 @njit(cache=True)
-def _sweeps_only(settings):
-    """``settings`` with PGS sweeps alone solving each linear system (no subspace minimisation).
+def _rough(settings):
+    """``settings`` for the positions phase: PGS sweeps alone solve each linear system (no subspace
+    minimisation), and the phase has met the positions once each is within :data:`POSITION_PHASE_TOLERANCE`.
 
-    The positions phase only has to steer the limbs into the right basin, and its systems (a row per position,
-    fewer rows than DOFs) are singular but for the damping: solving them exactly cost twice a full phase's time
-    per linearisation, and reached less (measured on bench_reach's first 300 poses: one attempt 61% in 0.88 ms
-    median, 64% in 0.57 ms with the sweeps alone).
+    The phase only has to steer the limbs into the right basin; the full phase meets the tolerances. Its
+    systems (a row per position, fewer rows than DOFs) are singular but for the damping: solved exactly they
+    cost twice a full phase's time per linearisation and reached less (measured on bench_reach's poses, one
+    attempt: 61% in 0.88 ms median; 64% in 0.57 ms with the sweeps alone; 64% in 23 rather than 28
+    linearisations with the 3 cm tolerance too).
     """
     return KernelSettings(settings.damping, settings.sweeps, settings.residual_tolerance, settings.update_tolerance,
                           settings.stall_tolerance, settings.max_step, settings.adaptive_damping, settings.warm_start,
-                          settings.position_tolerance, settings.orientation_tolerance, settings.settle_tolerance,
-                          False, settings.positions_first)
+                          max(settings.position_tolerance, POSITION_PHASE_TOLERANCE), settings.orientation_tolerance,
+                          settings.settle_tolerance, False, settings.positions_first)
 
 
 @njit(cache=True)
@@ -200,7 +204,7 @@ def _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts
     while True:
         if staged:
             share = max(1, int(math.ceil(POSITION_PHASE_SHARE * max_iterations)))
-            _phase(model, _sweeps_only(settings), _positions_only(targets), root, W, q,
+            _phase(model, _rough(settings), _positions_only(targets), root, W, q,
                    min(share, max_iterations - counts[0]), ws, sc, counts)
         status, cost = _phase(model, settings, targets, root, W, q, max_iterations - counts[0], ws, sc, counts)
         improved = cost < best * (1.0 - ROUND_GAIN)
@@ -223,7 +227,7 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     without subspace minimisation), the step scaled to ``settings.max_step``.
     With ``settings.positions_first`` and an orientation target off by more
     than :data:`STAGE_ANGLE`, rounds of a
-    positions-only phase (PGS sweeps alone, :func:`_sweeps_only`) then a full one, while a round lowers the error
+    positions-only phase (PGS sweeps alone, to 3 cm: :func:`_rough`) then a full one, while a round lowers the error
     (see the module's docstring); the best pose is kept. Sets
     ``ws.stats[O_STATUS]`` (converged; stalled: a best reach; budget
     exhausted), ``O_ITERATIONS`` (linearisations), ``O_SWEEPS``, ``O_COST``,
