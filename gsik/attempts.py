@@ -113,6 +113,7 @@ class AttemptPolicy:
         rng = np.random.default_rng(self._settings.seed)
         attempts = 1
         repeats = 0
+        # Agreement settles only targets no pose meets; others may still converge: every restart is made.
         settle_after = SETTLED_REPEATS if self._out_of_reach() else self._settings.restarts + 1
         while stats[O_STATUS] != Status.CONVERGED and attempts <= self._settings.restarts:
             stats = self._further_attempt(attempts, start, rng, best[1])
