@@ -68,8 +68,10 @@ class SolverSettings:
             effector positions (orientation rows off), then all rows; again
             from where that stalls while it lowers the error. It steers the
             solve away from poses the joint limits trap (see
-            :mod:`gsik.kernels.solve`). Off is the paper's method. A step
-            ignores it: a frame goes straight for every row.
+            :mod:`gsik.kernels.solve`). With priorities, posture or balance
+            the first prioritised steps of each attempt go for the positions
+            alone. Off is the paper's method. A step ignores it: a frame goes
+            straight for every row.
         warm_start: Start each frame's sweeps from the previous frame's ``dq``
             (in a solve, each linearisation's from the last step taken).
         orientation_weight: Weight of orientation rows relative to position

@@ -187,6 +187,19 @@ class Skeleton:
         anc.flags.writeable = False
         return anc
 
+    @cached_property
+    def chain_length(self) -> np.ndarray:
+        """(n_frames, n_frames) [m]: the length of the bones between two frames' origins along the tree, the
+        farthest apart any pose can put them (each frame keeps its offset's length from its parent)."""
+        bone = np.linalg.norm(self.frame_offset, axis=1)
+        depth = self.ancestry.T.astype(float) @ np.where(self.frame_parent >= 0, bone, 0.0)  # from the top
+        # The deepest frame above both is where their paths meet.
+        common = self.ancestry[:, :, None] & self.ancestry[:, None, :]
+        meet = np.max(np.where(common, depth[:, None, None], 0.0), axis=0)
+        length = depth[:, None] + depth[None, :] - 2.0 * meet
+        length.flags.writeable = False
+        return length
+
     def with_root(self, name: str) -> Skeleton:
         """The same skeleton with another default IK root (a site or a joint)."""
         self.frame_of(name)

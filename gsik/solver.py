@@ -19,7 +19,7 @@ from gsik import control, kernels
 from gsik.attempts import SETTLED_AGREEMENT, SETTLED_REPEATS, AttemptPolicy  # noqa: F401  (re-exported)
 from gsik.balance import center_of_mass
 from gsik.errors import SolverError, TargetError, choices, show_value
-from gsik.kernels import O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, O_COST, TargetArrays
+from gsik.kernels import O_COST, O_FINITE, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
 from gsik.kernels import solve as solve_kernels  # noqa: F401  (gsik.solver.solve_kernels, as before)
 from gsik.kernels import step as step_kernels
 from gsik.kernels.kinematics import forward_kinematics
@@ -120,7 +120,7 @@ class Solver(AttemptPolicy):
         self._state = np.zeros(sk.n_dofs + 2 * m)
         self._q = self._state[: sk.n_dofs]
         self._q[:] = q
-        self._q_before = np.empty(sk.n_dofs)  # a step's starting angles, to undo a non-finite step
+        self._q_before = np.empty(sk.n_dofs)  # a prioritised step's starting angles, to undo a non-finite one
         self._ws = kernels.make_workspace(sk.n_frames, sk.n_dofs, m, err=self._state[sk.n_dofs:].reshape(2, m))
         self._ws.lam[0] = lam
         self._inputs = None
@@ -300,17 +300,16 @@ class Solver(AttemptPolicy):
             self._refresh_frames()
             return self._control_result(Status.REFUSED, 1, math.inf, 0.0, 1)
         step, inputs = self._inputs or self._kernel_inputs()
-        self._q_before[:] = self._q
-        step(*inputs)
-        self._refuse_non_finite(self._q_before, self._ws.stats)
+        if not step(*inputs):  # stats[O_FINITE] 0: the kernel did not take the step, the angles are the last finite
+            self._refuse_non_finite(None, self._ws.stats)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
 
-    def _refuse_non_finite(self, before: np.ndarray, stats: np.ndarray) -> None:
-        """Undo a step that left a non-finite angle or error (status :attr:`Status.REFUSED`): the solver is never
-        poisoned, the pose stays the last finite one."""
-        if math.isfinite(self._state @ self._state):  # angles and errors, one buffer: finite unless one is not
-            return
-        self._q[:] = before
+    def _refuse_non_finite(self, before: np.ndarray | None, stats: np.ndarray) -> None:
+        """Undo a step or attempt that left a non-finite angle or error (``stats[O_FINITE]`` 0; status
+        :attr:`Status.REFUSED`): back to the angles ``before`` (None: the kernel left them), so the solver is
+        never poisoned and the pose stays the last finite one."""
+        if before is not None:
+            self._q[:] = before
         self._ws.x[:] = 0.0
         self._ws.lam[0] = self._settings.damping
         self._refresh_frames()

@@ -207,3 +207,18 @@ def test_unknown_names_list_the_choices(biped):
         biped.frame_of("elbow")
     with pytest.raises(gsik.SkeletonError, match="no degree of freedom 'left_knee.y'"):
         biped.dof_index("left_knee.y")
+
+
+def test_chain_length_bounds_how_far_apart_any_pose_puts_two_frames():
+    sk = gsik.load_skeleton("biped")
+    L = sk.chain_length
+    np.testing.assert_allclose(L, L.T)
+    assert np.all(np.diag(L) == 0.0)
+    rng = np.random.default_rng(7)
+    reached = np.zeros_like(L)
+    for _ in range(200):
+        p = sk.frame_transforms(rng.uniform(sk.lower, sk.upper))[:, :3, 3]
+        reached = np.maximum(reached, np.linalg.norm(p[:, None] - p[None], axis=2))
+    assert np.all(reached <= L + 1e-12)
+    shoulder, hand = sk.frame_of("left_shoulder"), sk.frame_of("left_hand")
+    assert reached[shoulder, hand] > 0.99 * L[shoulder, hand]  # the straight arm reaches its bound

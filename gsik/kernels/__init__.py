@@ -23,9 +23,10 @@ import numpy as np
 
 from gsik._jit import njit
 
-# Indices into the statistics vector the kernels fill.
-O_SWEEPS, O_RESIDUAL, O_UPDATE, O_COST, O_STEP_NORM, O_STATUS, O_ITERATIONS = range(7)
-N_STATS = 7
+# Indices into the statistics vector the kernels fill. O_FINITE: 1.0 if the angles and the used rows' errors a
+# step or solve leaves are all finite, else 0.0 (a step then leaves the angles as they were).
+O_SWEEPS, O_RESIDUAL, O_UPDATE, O_COST, O_STEP_NORM, O_STATUS, O_ITERATIONS, O_FINITE = range(8)
+N_STATS = 8
 # Status codes the kernels write into stats[O_STATUS]; gsik.solver.Status has these values.
 CONVERGED, STALLED, BUDGET_EXHAUSTED = 0, 1, 2
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from gsik._jit import njit
-from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS,
+from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, O_COST, O_FINITE, O_ITERATIONS, O_RESIDUAL, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, make_scratch)
 from gsik.kernels.kinematics import effector_errors, frames_into, linear_system
 from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
@@ -36,6 +36,21 @@ def _finish_errors(row_w, err, pos_tol, ori_tol):
         elif err[1, k] > ori_tol:
             ok = False
     return ok
+
+
+@njit(cache=True, inline="always")
+def _finite(q, err, row_w):
+    """True if the angles ``q`` and the errors ``err`` (2, m) of the rows ``row_w`` uses are all finite (their
+    squares sum to a finite number, as the Python side once checked)."""
+    total = 0.0
+    for i in range(q.shape[0]):
+        total += q[i] * q[i]
+    for k in range(err.shape[1]):
+        if row_w[k, 0] > 0.0:
+            total += err[0, k] * err[0, k]
+        if row_w[k, 3] > 0.0:
+            total += err[1, k] * err[1, k]
+    return math.isfinite(total)
 
 
 @njit(cache=True)
@@ -70,8 +85,8 @@ def _evaluate(model, targets, root, W, q, R, p, e, err, M):
 
 
 @njit(cache=True, inline="always")
-def _idle(ws, sc, cost):
-    """Every target already met: an idle frame costs one error evaluation."""
+def _idle(ws, sc, cost, finite):
+    """Every target already met (or the errors are not finite): an idle frame costs one error evaluation."""
     ws.err[:, :] = sc.err_new
     ws.x[:] = 0.0
     st = ws.stats
@@ -81,6 +96,7 @@ def _idle(ws, sc, cost):
     st[O_COST] = cost
     st[O_STEP_NORM] = 0.0
     st[O_STATUS] = CONVERGED
+    st[O_FINITE] = finite
 
 
 @njit(cache=True, inline="always")
@@ -136,14 +152,18 @@ def step(model, settings, targets, root, W, q, ws):
     return they hold the frames at the new ``q`` and ``ws.err`` (2, m) its
     errors. ``ws.x`` (n_dofs,) carries the previous frame's step in (the warm
     start) and this frame's step out; ``ws.lam`` the adaptive damping.
+    A step that would leave a non-finite angle or error is not taken and
+    ``ws.stats[O_FINITE]`` is 0.0 (else 1.0); returns the same as a bool,
+    which a caller from Python reads for less than an array element.
     """
     sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], False)
     cost0 = effector_errors(ws.R, ws.p, model.effector_frame, targets.position, targets.rotation,
                             targets.row_weight, sc.e, ws.err, sc.M)
     sc.err_new[:, :] = ws.err
     if _finish_errors(targets.row_weight, sc.err_new, settings.position_tolerance, settings.orientation_tolerance):
-        _idle(ws, sc, cost0)
-        return
+        finite = _finite(q, sc.err_new, targets.row_weight)
+        _idle(ws, sc, cost0, finite)
+        return finite
     linear_system(model, ws.R, ws.p, sc.e, targets.row_weight, sc.A, sc.b, sc.v)
     lam = ws.lam[0] if settings.adaptive_damping else settings.damping
     _step_solve(model, settings, q, lam, ws, sc)
@@ -152,12 +172,16 @@ def step(model, settings, targets, root, W, q, ws):
     accepted = True
     if settings.adaptive_damping:
         cost, accepted = _safeguard(model, settings, targets, root, W, q, lam, cost0, cost, ws, sc)
-    if accepted:
+    # A non-finite step is never taken: the caller refuses it (Status.REFUSED) from stats[O_FINITE].
+    finite = not accepted or _finite(sc.q_new, sc.err_new, targets.row_weight)
+    if accepted and finite:
         q[:] = sc.q_new
         ws.R[:, :, :] = sc.R_new
         ws.p[:, :] = sc.p_new
         ws.err[:, :] = sc.err_new
     _step_stats(settings, targets, ws, cost, accepted)
+    ws.stats[O_FINITE] = finite
+    return finite
 
 
 @njit(cache=True, inline="always")

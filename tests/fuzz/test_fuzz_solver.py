@@ -9,6 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import gsik
+from gsik.kernels import O_FINITE
 from gsik.solver import Status
 from gsik.targets import MAX_COORDINATE, MAX_WEIGHT
 
@@ -121,3 +122,30 @@ def test_a_prioritised_step_that_would_go_non_finite_is_refused_too(biped):
         np.testing.assert_array_equal(solver.q, q)
     solver.set_world_from_root(np.eye(4))
     _sane(solver, solver.solve({"left_hand": gsik.Target([0.2, 0.2, 1.0])}))
+
+
+def test_the_step_kernel_reports_a_non_finite_step_and_does_not_take_it(biped):
+    solver = gsik.Solver(biped)
+    solver.set_targets({"left_hand": gsik.Target([0.2, 0.2, 1.0])})
+    step, inputs = solver._kernel_inputs()
+    q, ws = inputs[5], inputs[6]
+    step(*inputs)
+    assert ws.stats[O_FINITE] == 1.0
+    huge = np.eye(4)
+    huge[:3, :3] *= 1e200  # finite but not a rotation: forward kinematics overflows
+    solver.set_world_from_root(huge)
+    before = q.copy()
+    step(*inputs)
+    assert ws.stats[O_FINITE] == 0.0
+    np.testing.assert_array_equal(q, before)  # the kernel itself left the angles as they were
+
+
+def test_the_solve_kernel_reports_whether_it_ends_finite(biped):
+    solver = gsik.Solver(biped, restarts=0)
+    solver.solve({"left_hand": gsik.Target([0.2, 0.2, 1.0])})
+    assert solver._ws.stats[O_FINITE] == 1.0
+    huge = np.eye(4)
+    huge[:3, :3] *= 1e200
+    solver.set_world_from_root(huge)
+    assert solver.solve().status is Status.REFUSED
+    assert solver._ws.stats[O_FINITE] == 0.0
