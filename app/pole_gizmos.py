@@ -7,7 +7,7 @@ each frame the spheres not being dragged go to their poles.
 
 from __future__ import annotations
 
-import vtk
+from vtkmodules.vtkInteractionWidgets import vtkSphereWidget
 
 from gsik_studio.scene import sphere_widget
 
@@ -27,7 +27,7 @@ class PoleGizmos:
         self.controls = viewport.doc.controls
         self.dragging: str | None = None
         pl = viewport.plotter
-        self.widgets: dict[str, vtk.vtkSphereWidget] = {}
+        self.widgets: dict[str, vtkSphereWidget] = {}
         for name in self.controls.pole_joints:
             w = sphere_widget(pl, POLE_RADIUS, POLE_COLOR, POLE_SELECTED_COLOR, (14, 10))
             w.AddObserver("StartInteractionEvent", lambda _w, _e, n=name: setattr(self, "dragging", n))

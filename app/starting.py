@@ -63,6 +63,9 @@ def _load(out: dict, stage: list) -> None:
         import pyvista as pv
         import pyvistaqt  # noqa: F401 (imported here, off the GUI thread)
 
+        import gsik_studio.body_view  # noqa: F401 (the 3D scene's modules and their VTK widgets)
+        import gsik_studio.viewport  # noqa: F401
+
         pv.global_theme.multi_samples = 0
         mark("view")
         stage.append("solver")

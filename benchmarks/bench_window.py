@@ -17,6 +17,11 @@ package (``setup.py``), so its first start is the warm case. Prints medians.
 The studio also says when each start-up stage ended (``GSIK_STUDIO_TIMES``, see
 :mod:`gsik_studio.starting`); the breakdown lists the seconds each stage took,
 from the process's start to the first frame of the main window.
+
+``--baseline DIR`` runs the same on other sources in the same run, interleaved
+(for before/after figures): ``DIR`` is put first on ``PYTHONPATH`` and holds
+``gsik_studio`` and ``gsik`` packages, e.g. links to ``app/`` and ``gsik/`` of
+a ``git worktree`` of the older commit.
 """
 
 from __future__ import annotations
@@ -37,7 +42,7 @@ MAIN_TITLE = "— gsik studio"
 STAGES = {
     "python and qt": "Python, gsik_studio, PySide6, QApplication",
     "start window": "start window shown",
-    "view": "import PyVista, pyvistaqt (VTK)",
+    "view": "import PyVista, pyvistaqt (VTK), the 3D scene's modules",
     "solver": "import gsik + numba kernels, Document()",
     "kernels": "two solver steps",
     "window built": "MainWindow() (Qt widgets, 3D scene)",
@@ -60,10 +65,13 @@ def _read_marks(stream, t0: float, marks: dict, lines: list) -> None:
             lines.append(line)
 
 
-def time_to_windows(cache: str, timeout: float = 300.0) -> tuple[float, float, dict[str, float]]:
+def time_to_windows(cache: str, timeout: float = 300.0, path: str | None = None
+                    ) -> tuple[float, float, dict[str, float]]:
     """(seconds to the start window, seconds to the main window, ``{stage: seconds since start when it ended}``)
-    for one new ``gsik-studio`` process."""
+    for one new ``gsik-studio`` process (its sources first looked up in ``path`` when given)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache, GSIK_STUDIO_TIMES="1")
+    if path:
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, (path, env.get("PYTHONPATH"))))
     marks: dict[str, float] = {}
     lines: list[str] = []
     with tempfile.TemporaryDirectory() as home:
@@ -108,20 +116,26 @@ def breakdown(runs: list[dict[str, float]]) -> list[tuple[str, float]]:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--baseline", metavar="DIR", help="also time the sources in DIR (see the docstring)")
     args = p.parse_args()
     if not os.environ.get("DISPLAY") or shutil.which("xdotool") is None:
         sys.exit("bench_window needs an X display (xvfb-run) and xdotool (see the docstring)")
-    cold, warm = [], []
+    trees = {"": None} if not args.baseline else {"baseline, ": args.baseline, "this tree, ": None}
+    runs = {(tree, case): [] for tree in trees for case in ("cold", "warm")}
+    loads = []
     for _ in range(args.repeats):
-        cache = tempfile.mkdtemp(prefix="gsik-numba-")
-        try:
-            cold.append(time_to_windows(cache))
-            warm.append(time_to_windows(cache))
-        finally:
-            shutil.rmtree(cache, ignore_errors=True)
-    load = os.getloadavg()[0]
-    print(f"gsik-studio time to window, median of {args.repeats} (load {load:.1f}):")
-    cases = (("cold (kernels compile)", cold), ("warm (cached kernels) ", warm))
+        for tree, path in trees.items():
+            cache = tempfile.mkdtemp(prefix="gsik-numba-")
+            try:
+                for case in ("cold", "warm"):  # warm: with the cache the cold run wrote
+                    loads.append(os.getloadavg()[0])
+                    runs[tree, case].append(time_to_windows(cache, path=path))
+            finally:
+                shutil.rmtree(cache, ignore_errors=True)
+    print(f"gsik-studio time to window, median of {args.repeats} (load {statistics.median(loads):.1f}, "
+          f"from {min(loads):.1f} to {max(loads):.1f}):")
+    label = {"cold": "cold (kernels compile)", "warm": "warm (cached kernels) "}
+    cases = [(f"{tree}{label[case]}", r) for (tree, case), r in runs.items()]
     for name, runs in cases:
         first = statistics.median(r[0] for r in runs)
         ready = statistics.median(r[1] for r in runs)
