@@ -60,6 +60,7 @@ class MainWindow(QtWidgets.QMainWindow):
         from gsik_studio.view_widget import ViewWidget
         from gsik_studio.balance_view import BalanceView
         from gsik_studio.body_view import BodyView
+        from gsik_studio.joint_highlight import JointHighlight
         from gsik_studio.joint_rings import JointRings
         from gsik_studio.pole_gizmos import PoleGizmos
         from gsik_studio.viewport import Viewport
@@ -82,6 +83,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.poles = PoleGizmos(self.viewport)
         self.joints = JointEditor(self.doc)
         self.rings = JointRings(self.viewport, self.joints)
+        self.joint_highlight = JointHighlight(self.viewport, self.joints, self.body.overlay)
         self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
                                  self._show_opened, self.open_document)
         self._make_actions()
@@ -139,11 +141,13 @@ class MainWindow(QtWidgets.QMainWindow):
         scroll.setWidget(panel)
         scroll.setWidgetResizable(True)
         scroll.setFrameShape(QtWidgets.QFrame.NoFrame)
+        scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarAlwaysOff)  # the dock is as wide as the panels need
         dock = QtWidgets.QDockWidget("Pose", self)
         dock.setObjectName("pose_panel")
         dock.setWidget(scroll)
         dock.setFeatures(QtWidgets.QDockWidget.DockWidgetMovable | QtWidgets.QDockWidget.DockWidgetFloatable)
-        dock.setMinimumWidth(440)
+        bar = scroll.verticalScrollBar().sizeHint().width()
+        dock.setMinimumWidth(max(440, panel.minimumSizeHint().width() + bar))
         self.addDockWidget(Qt.RightDockWidgetArea, dock)
 
     def _make_timeline_bar(self) -> None:
