@@ -1,7 +1,8 @@
 """The main window of gsik-studio: the assembly of viewport, panels, actions, file commands and read-outs.
 
 The window owns a :class:`gsik_studio.model.Document`, the :class:`gsik_studio.model.FrameLoop`
-that steps it and a :class:`gsik_studio.viewport.Viewport` that draws it. Each
+that steps it and a :class:`gsik_studio.viewport.Viewport` that draws it; :meth:`MainWindow.show_document`
+rebuilds them, the panels and the read-outs around another document (an imported skeleton). Each
 panel binds itself to the document's typed events and shows values inside
 signal blockers, so that showing a value never writes it back.
 
@@ -104,6 +105,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.joints = JointEditor(doc)
         self.rings = JointRings(self.viewport, self.joints)
         self.joint_highlight = JointHighlight(self.viewport, self.joints, self.body.overlay)
+        self.body.set_mode("sticks" if self.act_sticks.isChecked() else "mannequin")  # the view's options stay
+        self.loop.set_paused(self.act_pause.isChecked())
         self.set_orbit(str(self.settings.value("view/orbit", "turntable")))
         animations.fill_scenario_menu(self.scenario_menu, doc.skeleton, self.play_scenario)
         self._make_panel()

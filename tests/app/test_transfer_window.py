@@ -82,6 +82,7 @@ def test_import_skeleton_rebuilds_this_window_asking_first_about_unsaved_changes
     _dialog_returns(monkeypatch, os.path.join(DATA, "humanoid.urdf"))
     biped = window.doc
     biped.random_pose(seed=5)
+    window.act_sticks.trigger()  # a view option: it stays for the new document
     boxes["answer"] = QMessageBox.Cancel
     window.act_import_skeleton.trigger()  # File -> Import skeleton..., unsaved changes: Cancel
     assert len(boxes["question"]) == 1 and "import another skeleton" in boxes["question"][0][1]
@@ -92,6 +93,7 @@ def test_import_skeleton_rebuilds_this_window_asking_first_about_unsaved_changes
     doc = window.doc
     assert doc is not biped and doc.skeleton.name == "mini_humanoid" and doc.root == doc.skeleton.root
     assert _shows_skeleton(window, doc.skeleton)
+    assert window.body.mode == "sticks" and window.act_sticks.isChecked()
     assert set(doc.targets) == set(doc.skeleton.effector_sites) - {doc.root}
     assert not window.act_root_left.isEnabled()  # no feet to pin
     assert window.windowTitle().startswith("Untitled") and not doc.dirty and not window.act_undo.isEnabled()
