@@ -55,6 +55,8 @@ def test_the_joint_selected_for_rotation_is_highlighted_and_the_highlight_follow
 
 def test_the_natural_posture_toggle_switches_between_the_prior_and_the_rest_pose(window, qtbot, studio_settings):
     from gsik.prior import bundled_prior
+    from gsik_studio.model import Document
+    from gsik_studio.widgets.balance_panel import balance_panel
 
     doc, panel = window.doc, window.balance_panel
     box = panel.natural
@@ -65,6 +67,9 @@ def test_the_natural_posture_toggle_switches_between_the_prior_and_the_rest_pose
     assert not box.isChecked() and not doc.controls.natural
     np.testing.assert_allclose(doc.solver.posture.reference, doc.skeleton.rest)
     assert str(studio_settings.value("controls/natural")).lower() == "false"
+    again = Document()  # the next window's panel starts on the rest pose, as left
+    balance_panel(again, studio_settings, lambda _on: None)
+    assert not again.controls.natural
     _click_widget(box)
     assert box.isChecked() and doc.controls.natural
     np.testing.assert_allclose(doc.solver.posture.reference, mean)
