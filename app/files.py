@@ -141,7 +141,7 @@ class FileActions:
         motion = transfer.motion_on(self.doc.skeleton, imported.motion)
         if motion is None:  # another skeleton: a document of its own
             doc = transfer.document_for(imported.skeleton)
-            doc.timeline.load(imported.motion, name)
+            doc.timeline.load(imported.motion, name, f"Import {name}")
             shown = self._show_new(doc, new_window, "import a clip of another skeleton")
             if shown is False:
                 return False
@@ -150,7 +150,7 @@ class FileActions:
                           8000)
             return shown
         self._stop_playback()
-        self.doc.timeline.load(motion, name)
+        self.doc.timeline.load(motion, name, f"Import {name}")
         self.doc.timeline.play()
         self._message(f"Imported {name}: {motion.n_frames} frames on the timeline", 8000)
         return True

@@ -28,6 +28,7 @@ from gsik.targets import Target
 from gsik.rotations import matrix_from_axis_angle
 from gsik_studio.model.events import DocumentEvents, Signal
 from gsik_studio.model.history import Command, History
+from gsik_studio.model.kept import Kept, file_fields, kept_from_file, kept_state, show_kept
 from gsik_studio.model.library import PoseLibrary
 from gsik_studio.model.mirror import mirror_map
 from gsik_studio.model.pins import SolveControls, default_levels
@@ -74,7 +75,7 @@ class Document:
         self._targets: dict[str, Target] = {}
         self._playback: Playback | None = None
         self._placement = RootPlacement((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
-        self.controls = SolveControls(self.solver, self._push_targets)
+        self.controls = SolveControls(self.solver, self._push_targets, self._edit)
         self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT, default_levels(self.skeleton)))
         self._mirror = {s: mirror_map(self.skeleton, s) for s in ("left", "right")}
         self.timeline = Timeline(self)  # the motion kept with the pose
@@ -188,10 +189,10 @@ class Document:
         merging = self.history.would_merge(merge_key)
         before = self.history.commands[-1].before if merging else self.pose()  # a drag keeps its first "before"
         file_state = self._file_state()
-        library = self.library.snapshot()
+        kept = kept_state(self)
         apply()
         self.needs_solving = True
-        self.history.push(Command(text, before, merge_key=merge_key, library_before=library))
+        self.history.push(Command(text, before, merge_key=merge_key, kept_before=kept))
         (signal or self.events.pose).emit()
         if not merging:
             self.events.history.emit()
@@ -359,10 +360,10 @@ class Document:
             return False
         file_state = self._file_state()
         cmd = self.history.commands[self.history.index - 1]
-        cmd.after, cmd.library_after = self.pose(), self.library.snapshot()
+        cmd.after, cmd.kept_after = self.pose(), kept_state(self)
         cmd.merge_key = None
         self._restore(cmd.before)
-        self.library.restore(cmd.library_before)
+        show_kept(self, cmd.kept_before)
         self.history.index -= 1
         self._replaced(file_state)
         return True
@@ -375,7 +376,7 @@ class Document:
         file_state = self._file_state()
         cmd = self.history.commands[self.history.index]
         self._restore(cmd.after)
-        self.library.restore(cmd.library_after)
+        show_kept(self, cmd.kept_after)
         self.history.index += 1
         self._replaced(file_state)
         return True
@@ -404,14 +405,14 @@ class Document:
     def open(self, path: str) -> tuple[str, ...]:
         """Load a pose file; returns its warnings (angles clamped into limits).
 
-        On any error (:class:`gsik.GsikFileError`, :class:`gsik.PoseError`)
-        the document is left exactly as it was.
+        On any error (:class:`gsik.GsikFileError`, :class:`gsik.PoseError`) the document is left exactly as it was.
         """
         read: PoseRead = read_pose(path, self.skeleton)
+        kept = kept_from_file(self, read)
         self._interrupt_playback()
         file_state = self._file_state()
         self._restore(read.pose)
-        self.library.restore(read.library)
+        show_kept(self, kept)
         self.history.clear()
         self.path = str(path)
         if read.warnings:
@@ -423,13 +424,13 @@ class Document:
         """Write the pose atomically to ``path`` (default: the current file).
 
         Raises:
-            GsikFileError: nothing was written; the document keeps its path and dirty flag.
+            GsikFileError, PoseError: nothing was written; the document keeps its path and dirty flag.
         """
         target = path or self.path
         if not target:
             raise gsik.GsikFileError("no file name to save to (use Save As)")
         file_state = self._file_state()
-        write_pose(target, self.pose(), self.library.snapshot())
+        write_pose(target, self.pose(), **file_fields(kept_state(self)))
         self.path = str(target)
         self.history.set_clean()
         self._emit_file(file_state)
@@ -439,8 +440,7 @@ class Document:
         self._interrupt_playback()
         file_state = self._file_state()
         self._restore(standing_pose(self.skeleton, {}, self.POSITION_ONLY_BY_DEFAULT, default_levels(self.skeleton)))
-        self.library.restore(())
-        self.timeline.clear()
+        show_kept(self, Kept())  # no library, keys, clip or poles
         self.history.clear()
         self.path = None
         self._replaced(file_state)
@@ -495,6 +495,6 @@ class Document:
         if self._playback is playback:
             self._playback = None
         file_state = self._file_state()
-        self.history.push(Command(playback.text, playback.before, library_before=self.library.snapshot()))
+        self.history.push(Command(playback.text, playback.before, kept_before=kept_state(self)))
         self.needs_solving = True
         self._replaced(file_state)

@@ -15,7 +15,8 @@ class Command:
         text: What the edit did, for menus ("Move left_hand").
         before: The document's pose before the edit.
         after: The pose to restore on redo; set when the command is undone.
-        library_before, library_after: The document's pose library (a snapshot) before the edit and on redo.
+        kept_before, kept_after: What the document keeps besides the pose (its pose library, timeline and pole
+            targets: a :class:`gsik_studio.model.kept.Kept`) before the edit, and on redo.
         merge_key: Consecutive commands with the same non-None key merge
             into one (every mouse move of one drag is one command).
     """
@@ -24,8 +25,8 @@ class Command:
     before: Pose
     after: Pose | None = None
     merge_key: object | None = None
-    library_before: tuple = ()  # the pose library's snapshot before the edit
-    library_after: tuple = ()  # ... and on redo
+    kept_before: object = None  # a Kept: library, timeline, poles before the edit
+    kept_after: object = None  # ... and on redo
 
 
 @dataclass(eq=False)

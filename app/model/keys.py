@@ -112,12 +112,13 @@ def bake_target_frames(skeleton: gsik.Skeleton, settings: gsik.SolverSettings, s
 
 
 def bake_keys(skeleton: gsik.Skeleton, settings: gsik.SolverSettings, keys: Mapping[int, Pose],
-              frame_time: float, steps: int = KEY_STEPS) -> Motion:
-    """The key sequence as a motion of ``max(keys) + 1`` frames.
+              frame_time: float, steps: int = KEY_STEPS, n_frames: int = 0) -> Motion:
+    """The key sequence as a motion of ``max(keys) + 1`` frames, or ``n_frames`` when that is more.
 
-    Frames before the first key hold it; a key frame shows its pose exactly;
-    a frame between keys is solved from :func:`interpolated_targets`,
-    warm-started from the frame before (root and placement of the earlier key).
+    Frames before the first key hold it, frames after the last key hold that;
+    a key frame shows its pose exactly; a frame between keys is solved from
+    :func:`interpolated_targets`, warm-started from the frame before (root and
+    placement of the earlier key).
 
     Raises:
         GsikError: no keys.
@@ -126,9 +127,9 @@ def bake_keys(skeleton: gsik.Skeleton, settings: gsik.SolverSettings, keys: Mapp
         raise GsikError("no keyed poses to bake: add a key first")
     frames = sorted(keys)
     baker = _Baker(skeleton, settings, keys[frames[0]])
-    for i in range(frames[-1] + 1):
+    for i in range(max(frames[-1] + 1, n_frames)):
         k = int(np.searchsorted(frames, i, side="right")) - 1  # the last key at or before i
-        if k < 0 or frames[k] == i:
+        if k < 0 or frames[k] == i or k == len(frames) - 1:
             baker.place(keys[frames[max(k, 0)]])
         else:
             a, b = frames[k], frames[k + 1]

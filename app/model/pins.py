@@ -64,27 +64,30 @@ class Support(NamedTuple):
 
 
 class SolveControls:
-    """Posture (strength, natural or rest) and balance of a document's solver, centre of mass and support read-outs.
+    """Posture (strength, natural or rest) and balance of a document's solver, its pole targets, the centre of mass
+    and support read-outs.
 
     Pole targets are position-only targets on knees and elbows at level
     :data:`POLE`: dragging one swings the limb's bend towards it without moving
-    any hand or foot. They are solver state like the posture (not saved, not undone).
+    any hand or foot. Unlike the posture and balance they are document state:
+    every change is one undo step, and pose files keep them.
 
     Args:
         solver: The document's solver.
-        push: Hands the document's targets and these poles to the solver (the document's own method).
+        push: Hands the document's targets and the enabled poles to the solver (the document's own method).
+        edit: Runs a change as one undo step (the document's ``_edit(text, apply, merge_key, signal)``).
 
     Attributes:
         posture: The :class:`gsik_studio.model.posture.Posture` (natural or rest, and its strength).
-        poles: ``{joint: Target}`` while pole targets are on, else empty.
         changed: Signal() after the posture (strength, natural), balance or a pole changed.
     """
 
-    def __init__(self, solver: gsik.Solver, push: Callable[[], None]):
+    def __init__(self, solver: gsik.Solver, push: Callable[[], None], edit: Callable[..., None]):
         self._solver = solver
         self._push = push
+        self._edit = edit
         self.posture = Posture(solver)  # natural (the bundled prior) when there is one
-        self.poles: dict[str, Target] = {}
+        self._poles: dict[str, Target] = {}  # every pole placed so far, enabled or not
         self.changed = Signal()
 
     @property
@@ -92,25 +95,58 @@ class SolveControls:
         """The joints of :data:`POLE_JOINTS` this skeleton has."""
         return tuple(n for n in POLE_JOINTS if n in self._solver.skeleton.joint_names)
 
+    @property
+    def poles(self) -> dict[str, Target]:
+        """``{joint: Target}`` of the enabled pole targets (a new dict)."""
+        return {n: t for n, t in self._poles.items() if t.enabled}
+
     def joint_position(self, joint: str) -> np.ndarray:
         """World position (3,) [m] of a joint now."""
         sk = self._solver.skeleton
         return self._solver.world_positions()[sk.joint_frame[sk.joint_names.index(joint)]]
 
-    def set_poles(self, on: bool) -> None:
-        """Turn pole targets on (each placed on its joint, so nothing moves yet) or off."""
-        self.poles = {n: Target(self.joint_position(n), position_only=True, priority=POLE)
-                      for n in self.pole_joints} if on else {}
-        self._push()
-        self.changed.emit()
+    def _pole_on_joint(self, joint: str) -> Target:
+        return Target(self.joint_position(joint), position_only=True, priority=POLE)
 
-    def move_pole(self, joint: str, position) -> None:
-        """Move one pole target to a world position (3,) [m]."""
+    def set_poles(self, on: bool) -> None:
+        """Turn every pole target on (each placed on its joint, so nothing moves yet) or off: one undo step."""
+        new = ({n: self._pole_on_joint(n) for n in self.pole_joints} if on
+               else {n: t.replace(enabled=False) for n, t in self._poles.items()})
+        if new != self._poles:
+            self._change("Pole targets on" if on else "Pole targets off", new)
+
+    def set_pole_enabled(self, joint: str, on: bool) -> None:
+        """Turn one pole target on (placed on its joint when it had none yet) or off: one undo step."""
+        if joint not in self.pole_joints:
+            raise gsik.TargetError(f"no pole target on {joint!r}; pole joints: {', '.join(self.pole_joints) or 'none'}")
+        old = self._poles.get(joint) or self._pole_on_joint(joint).replace(enabled=False)
+        if old.enabled != bool(on):
+            self._change(f"Pole {joint} {'on' if on else 'off'}", {**self._poles, joint: old.replace(enabled=bool(on))})
+
+    def move_pole(self, joint: str, position, drag: object | None = None) -> None:
+        """Move one enabled pole target to a world position (3,) [m]: one undo step (one per ``drag`` token)."""
         if joint not in self.poles:
             raise gsik.TargetError(f"no pole target on {joint!r}; poles: {', '.join(self.poles) or 'none (off)'}")
-        self.poles[joint] = self.poles[joint].replace(position=position)
+        moved = self._poles[joint].replace(position=position)
+        key = None if drag is None else ("pole", joint, drag)
+        self._change(f"Move pole {joint}", {**self._poles, joint: moved}, key)
+
+    def pole_snapshot(self) -> tuple[tuple[str, Target], ...]:
+        """Every pole target placed, enabled or not (the undo history and pose files keep it)."""
+        return tuple(self._poles.items())
+
+    def restore_poles(self, poles: tuple[tuple[str, Target], ...]) -> None:
+        """Show ``poles`` (undo, redo, a file opened); no undo step."""
+        if poles != self.pole_snapshot():
+            self._set_poles(dict(poles))
+            self.changed.emit()
+
+    def _set_poles(self, poles: dict[str, Target]) -> None:
+        self._poles = poles
         self._push()
-        self.changed.emit()
+
+    def _change(self, text: str, poles: dict[str, Target], merge_key: object | None = None) -> None:
+        self._edit(text, lambda: self._set_poles(poles), merge_key, self.changed)
 
     @property
     def has_masses(self) -> bool:

@@ -15,10 +15,12 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
+from gsik import validate
 from gsik.anim.motion import Motion
 from gsik.errors import GsikError
+from gsik.io.pose.sequence import MAX_SEQUENCE_FRAMES
 from gsik.io.pose import Pose
 from gsik.targets import Target
 from gsik_studio.model.events import Signal
@@ -28,8 +30,26 @@ if TYPE_CHECKING:
     from gsik_studio.model.document import Document
     from gsik_studio.model.playback import Playback
 
-#: Frame time of keyed sequences [s] (30 frames per second).
+#: Frame time of keyed sequences [s] (30 frames per second), unless a file says otherwise.
 KEY_FRAME_TIME = 1 / 30
+
+
+class TimelineState(NamedTuple):
+    """What a document keeps of its timeline (immutable: the undo history and pose files hold it).
+
+    Attributes:
+        clip: The motion on the timeline, or None.
+        name: The clip's name ("" without a clip).
+        keys: ``((frame, Pose), ...)`` keyed poses in frame order.
+        fps: Frames per second of the key sequence.
+        length: Frames the key sequence spans at least (0: up to its last key).
+    """
+
+    clip: Motion | None = None
+    name: str = ""
+    keys: tuple[tuple[int, Pose], ...] = ()
+    fps: float = 1 / KEY_FRAME_TIME
+    length: int = 0
 
 
 class TimelineEvents:
@@ -59,6 +79,8 @@ class Timeline:
         clip: The motion on the timeline (None: the keys play, if any).
         name: The clip's name (undo texts: "Walk", "Scrub Walk").
         keys: ``{frame: Pose}`` keyed poses (used when there is no clip).
+        key_fps: Frames per second of the key sequence.
+        key_length: Frames the key sequence spans at least (0: up to its last key).
         frame: The current frame index.
         playing: True while the clock moves the frame.
         loop: True to start over at the end instead of stopping there.
@@ -71,6 +93,7 @@ class Timeline:
         self.clip: Motion | None = None
         self.name = ""
         self.keys: dict[int, Pose] = {}
+        self.key_fps, self.key_length = TimelineState().fps, TimelineState().length
         self.frame = 0
         self.playing = False
         self.loop = False
@@ -85,7 +108,8 @@ class Timeline:
         if self.clip is not None:
             return self.clip
         if self.keys and self._baked is None:
-            self._baked = bake_keys(self.doc.skeleton, self.doc.settings, self.keys, KEY_FRAME_TIME)
+            self._baked = bake_keys(self.doc.skeleton, self.doc.settings, self.keys, 1 / self.key_fps,
+                                    n_frames=self.key_length)
         return self._baked
 
     @property
@@ -93,21 +117,18 @@ class Timeline:
         """Frames on the timeline: the clip's, else up to the last key (at least the current frame)."""
         if self.clip is not None:
             return self.clip.n_frames
-        return max([self.frame, *self.keys]) + 1 if self.keys else 1
+        return max([self.frame, *self.keys, self.key_length - 1]) + 1 if self.keys else 1
 
     @property
     def frame_time(self) -> float:
         """Seconds per frame [s]."""
-        return float(self.clip.frame_time) if self.clip is not None else KEY_FRAME_TIME
+        return float(self.clip.frame_time) if self.clip is not None else 1 / self.key_fps
 
-    def load(self, motion: Motion, name: str) -> None:
-        """Put a motion on the timeline (replacing any clip), at frame 0, not playing."""
+    def load(self, motion: Motion, name: str, text: str | None = None) -> None:
+        """Put a motion on the timeline (replacing any clip), at frame 0, not playing: one undo step (``text``)."""
         if motion.skeleton.name != self.doc.skeleton.name:
             raise GsikError(f"motion is for skeleton {motion.skeleton.name!r}, not {self.doc.skeleton.name!r}")
-        self.pause()
-        self.clip, self.name, self.frame = motion, name, 0
-        self.events.content.emit()
-        self.events.frame.emit()
+        self._change(text or f"Load {name}", clip=motion, name=name, frame=0)
 
     def load_target_frames(self, frames: Sequence[Mapping[str, Target | None]], name: str,
                            frame_time: float) -> None:
@@ -116,54 +137,67 @@ class Timeline:
                   name)
 
     def discard(self) -> None:
-        """Take the clip off the timeline (the pose shown stays)."""
-        self.pause()
-        self.clip, self.name, self.frame = None, "", 0
-        self.events.content.emit()
-        self.events.frame.emit()
+        """Take the clip off the timeline (the pose shown stays): one undo step."""
+        if self.clip is not None:
+            self._change(f"Discard {self.name or 'clip'}", clip=None, name="", frame=0)
 
-    def clear(self) -> None:
-        """An empty timeline: no clip, no keys, frame 0 (a new document)."""
+    # -- state kept in the document ----------------------------------------------------------
+    def snapshot(self) -> TimelineState:
+        """What the document keeps of the timeline (undo and pose files)."""
+        return TimelineState(self.clip, self.name, tuple(sorted(self.keys.items())), self.key_fps, self.key_length)
+
+    def restore(self, state: TimelineState) -> None:
+        """Show ``state`` (undo, redo, a file opened); no undo step. The current frame stays on the timeline."""
+        if state != self.snapshot():
+            self._set(state)
+            self.events.content.emit()
+
+    def _set(self, state: TimelineState, frame: int | None = None) -> None:
+        """Take ``state`` (not playing), and the current ``frame`` if given (kept on the timeline)."""
         self.pause()
-        self.clip, self.name, self.frame, self.keys, self._baked = None, "", 0, {}, None
-        self.events.content.emit()
-        self.events.frame.emit()
+        if (tuple(sorted(self.keys.items())), self.key_length, self.key_fps) != (state.keys, state.length, state.fps):
+            self._baked = None
+        self.clip, self.name, self.keys = state.clip, state.name, dict(state.keys)
+        self.key_fps, self.key_length = state.fps, state.length
+        self.frame = min(self.frame if frame is None else frame, self.n_frames - 1)
+
+    def _change(self, text: str, frame: int | None = None, **fields) -> None:
+        """Replace fields of :meth:`snapshot` (and the current frame) as one undo step of the document."""
+        state = self.snapshot()._replace(**fields)
+        self.doc._edit(text, lambda: self._set(state, frame), signal=self.events.content)
 
     # -- keys -----------------------------------------------------------------------------
-    def _keys_changed(self) -> None:
-        self._baked = None
-        self.events.content.emit()
-
     def add_key(self, frame: int | None = None) -> int:
-        """Key the document's pose at ``frame`` (default: the current frame); returns the frame."""
+        """Key the document's pose at ``frame`` (default: the current frame); returns the frame. One undo step."""
         if self.clip is not None:
             raise GsikError(f"the timeline holds the clip {self.name!r}: discard it before keying poses")
-        f = self.frame if frame is None else self._check_frame(frame, allow_past_end=True)
-        self.keys[f] = self.doc.pose()
-        self._keys_changed()
+        f = self.frame if frame is None else self._check_frame(frame)
+        self._change(f"Add key at frame {f}", keys=tuple(sorted({**self.keys, f: self.doc.pose()}.items())))
         return f
 
     def move_key(self, old: int, new: int) -> None:
-        """Move the key at frame ``old`` to frame ``new`` (replacing a key there)."""
-        self._key(old)
-        self.keys[self._check_frame(new, allow_past_end=True)] = self.keys.pop(old)
-        self._keys_changed()
+        """Move the key at frame ``old`` to frame ``new`` (replacing a key there). One undo step."""
+        pose = self._key(old)
+        new = self._check_frame(new)
+        if new != old:
+            keys = {f: p for f, p in self.keys.items() if f != old}
+            self._change(f"Move key {old} to {new}", keys=tuple(sorted({**keys, new: pose}.items())))
 
     def delete_key(self, frame: int) -> None:
+        """Delete the key at ``frame``. One undo step."""
         self._key(frame)
-        del self.keys[frame]
-        self._keys_changed()
+        self._change(f"Delete key at frame {frame}", keys=tuple((f, p) for f, p in sorted(self.keys.items())
+                                                                 if f != frame))
 
     def _key(self, frame: int) -> Pose:
         if frame not in self.keys:
             raise GsikError(f"no key at frame {frame}; keys at {sorted(self.keys) or 'no frame'}")
         return self.keys[frame]
 
-    def _check_frame(self, frame: int, allow_past_end: bool = False) -> int:
-        f = int(frame)
-        if f < 0 or (not allow_past_end and f >= self.n_frames):
-            raise GsikError(f"frame {frame} is outside the timeline (0 .. {self.n_frames - 1})")
-        return f
+    @staticmethod
+    def _check_frame(frame: int) -> int:
+        """A key's frame: a whole number below the bound pose files keep (past the timeline's end is fine)."""
+        return validate.whole(frame, "a key's frame", GsikError, floats=True, maximum=MAX_SEQUENCE_FRAMES - 1)
 
     # -- transport ------------------------------------------------------------------------
     def _open_session(self, text: str) -> Playback | None:

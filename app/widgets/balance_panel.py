@@ -42,6 +42,10 @@ def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Calla
     form.poles.toggled.connect(controls.set_poles)
     form.layout().addRow(form.poles)
 
+    def show_poles() -> None:  # undo, redo and opened files turn poles on or off too
+        with QtCore.QSignalBlocker(form.poles):
+            form.poles.setChecked(bool(controls.poles))
+
     def set_balance(on: bool) -> None:
         try:
             controls.set_balance(on)
@@ -54,6 +58,8 @@ def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Calla
     form.show_com.toggled.connect(show_support)
     controls.changed.connect(form.show_model)
     controls.changed.connect(lambda: _show_natural(form.natural, controls))
+    controls.changed.connect(show_poles)
+    show_poles()  # a document opened before the window may have poles on
     return form
 
 

@@ -66,11 +66,26 @@ def _target_pose(world_from_effector):
     return make.from_transform(world_from_effector)
 
 
+def _pose_with_motion(skeleton: gsik.Skeleton) -> str:
+    """A pose file that also keeps keys, poles and a two-frame clip (the studio's timeline and pole targets)."""
+    import numpy as np
+
+    from gsik.anim.motion import Motion
+    from gsik.io.pose import Clip, KeySequence, Pole
+
+    pose = pose_of(skeleton)
+    W = np.tile(gsik.Solver(skeleton).world_from_root, (2, 1, 1))
+    clip = Clip("walk.bvh", Motion(skeleton, np.tile(skeleton.rest, (2, 1)), (skeleton.root,) * 2, W, 1 / 30))
+    return pose_to_yaml(pose, keys=KeySequence(((0, pose), (12, pose)), 24.0, 20),
+                        poles={"left_knee": Pole((0.1, 0.3, 0.5)), "right_elbow": Pole((-0.2, 0.1, 1.0), False)},
+                        clip=clip)
+
+
 @functools.cache
 def seeds() -> dict[str, list[str]]:
     """Valid seed texts for each format."""
     return {
-        "pose": [pose_to_yaml(pose_of(gsik.load_skeleton("biped")))],
+        "pose": [pose_to_yaml(pose_of(gsik.load_skeleton("biped"))), _pose_with_motion(gsik.load_skeleton("biped"))],
         "skeleton": [(ROOT / "skeletons" / "biped.yaml").read_text(encoding="utf-8")],
         "bvh": [p.read_text(encoding="utf-8") for p in sorted(DATA.glob("*.bvh"))],
         "urdf": [p.read_text(encoding="utf-8") for p in sorted(DATA.glob("*.urdf"))],

@@ -11,6 +11,7 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik import validate
+from gsik.anim.motion import Motion
 from gsik.errors import PoseError, show_value
 from gsik.rotations import matrix_from_quaternion, transform
 from gsik.skeleton import Skeleton
@@ -28,6 +29,15 @@ LIMIT_TOLERANCE = 1e-9
 _POSE_KEYS = ("root", "root_transform", "joints", "targets")
 _TOP_KEYS = ("format", "skeleton", *_POSE_KEYS)
 _LIBRARY_KEY = "library"
+_KEYS_KEY, _POLES_KEY, _CLIP_KEY = "keys", "poles", "clip"
+_OPTIONAL_TOP_KEYS = (_LIBRARY_KEY, _KEYS_KEY, _POLES_KEY, _CLIP_KEY)
+_KEY_SEQUENCE_KEYS = ("fps", "length", "poses")
+_POLE_KEYS = ("position", "enabled")
+_CLIP_KEYS = ("name", "frame_time", "dofs", "frames")
+_CLIP_FRAME_KEYS = ("root", "world_from_root", "angles")
+
+#: Most frames per second a key sequence may have.
+MAX_FPS = 1000.0
 
 #: What a pose's ``skeleton:`` field ends in when it names a skeleton file instead of a bundled skeleton.
 SKELETON_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".bvh")
@@ -103,6 +113,44 @@ class Pose:
         return Pose(**fields)
 
 
+class KeySequence(NamedTuple):
+    """Keyed poses on a timeline: what a pose file's ``keys`` holds.
+
+    Attributes:
+        keys: ``((frame, Pose), ...)`` in increasing frame order, frames whole numbers >= 0.
+        fps: Frames per second of the sequence [1/s] (> 0).
+        length: Frames on the timeline (>= the last key's frame + 1).
+    """
+
+    keys: tuple[tuple[int, Pose], ...]
+    fps: float = 30.0
+    length: int = 0
+
+
+class Pole(NamedTuple):
+    """A pole target on a joint (knee, elbow): where its bend should point.
+
+    Attributes:
+        position: World position (3,) [m].
+        enabled: False: kept, but the solver ignores it.
+    """
+
+    position: tuple[float, float, float]
+    enabled: bool = True
+
+
+class Clip(NamedTuple):
+    """A motion kept with a pose (the studio's timeline clip): its name and its angle frames.
+
+    Attributes:
+        name: What the clip is called ("walk.bvh", "Walk").
+        motion: The frames: angles, root and root transform per frame, frame time.
+    """
+
+    name: str
+    motion: Motion
+
+
 class PoseRead(NamedTuple):
     """What reading a pose file gives.
 
@@ -112,11 +160,17 @@ class PoseRead(NamedTuple):
             clamped into its limits); empty when the file was clean.
         library: The file's named poses ``((name, Pose), ...)`` in file order
             (empty for a single-pose file).
+        keys: The file's key sequence (None when it has none).
+        poles: ``{joint: Pole}`` in file order (empty when it has none).
+        clip: The file's clip (None when it has none).
     """
 
     pose: Pose
     warnings: tuple[str, ...]
     library: tuple[tuple[str, Pose], ...] = ()
+    keys: KeySequence | None = None
+    poles: Mapping[str, Pole] = MappingProxyType({})
+    clip: Clip | None = None
 
 
 # -- reading -----------------------------------------------------------------

@@ -9,8 +9,10 @@ from typing import Any, NamedTuple
 from gsik.errors import PoseError, choices, show_value
 from gsik.io.files import read_text
 from gsik.io.yaml_safe import load_yaml
+from gsik.io.pose import sequence
 from gsik.io.pose.model import (LIMIT_TOLERANCE, POSE_FORMAT, QUATERNION_NORM_TOLERANCE, SKELETON_FILE_SUFFIXES,
-                               _LIBRARY_KEY, _POSE_KEYS, _TARGET_KEYS, _TOP_KEYS, _TRANSFORM_KEYS, Pose, PoseRead)
+                               _CLIP_KEY, _KEYS_KEY, _LIBRARY_KEY, _OPTIONAL_TOP_KEYS, _POLES_KEY, _POSE_KEYS,
+                               _TARGET_KEYS, _TOP_KEYS, _TRANSFORM_KEYS, Pose, PoseRead)
 from gsik.skeleton import Skeleton
 from gsik.targets import MAX_COORDINATE, MAX_WEIGHT, Target
 
@@ -92,6 +94,18 @@ class _Reader:
             self.fail(path, f"must be a name, got {_show(value)}")
         return value
 
+    def whole(self, value, path: tuple, maximum: int) -> int:
+        """A whole number in [0, ``maximum``]."""
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= maximum:
+            self.fail(path, f"must be a whole number from 0 to {maximum}, got {_show(value)}")
+        return value
+
+    def items(self, value, path: tuple, what: str) -> list:
+        """A list (``what`` names its items in the message)."""
+        if not isinstance(value, list):
+            self.fail(path, f"must be a list of {what}, got {_show(value)}")
+        return value
+
 
 def _show(value) -> str:
     return "nothing" if value is None else show_value(value)
@@ -161,11 +175,20 @@ def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> Pos
 def pose_from_document(doc: PoseDocument, skeleton: Skeleton) -> PoseRead:
     """Validate a parsed pose file for ``skeleton`` (see :func:`pose_from_yaml`)."""
     r = _Reader(doc.source, doc.lines)
-    top = r.mapping(doc.data, (), _TOP_KEYS, (_LIBRARY_KEY,))
+    top = r.mapping(doc.data, (), _TOP_KEYS, _OPTIONAL_TOP_KEYS)
     _check_header(r, top, skeleton)
     pose, warnings = _read_pose_fields(r, top, (), skeleton)
     library = _read_library(r, top.get(_LIBRARY_KEY, []), skeleton, warnings)
-    return PoseRead(pose, tuple(warnings), library)
+
+    def pose_at(fields: dict, at: tuple) -> Pose:
+        key_pose, more = _read_pose_fields(r, fields, at, skeleton)
+        warnings.extend(more)
+        return key_pose
+
+    keys = sequence.read_keys(r, top[_KEYS_KEY], pose_at) if _KEYS_KEY in top else None
+    poles = sequence.read_poles(r, top.get(_POLES_KEY, {}), skeleton)
+    clip = sequence.read_clip(r, top[_CLIP_KEY], skeleton) if _CLIP_KEY in top else None
+    return PoseRead(pose, tuple(warnings), library, keys, poles, clip)
 
 
 def _read_pose_fields(r: _Reader, fields: dict, at: tuple, skeleton: Skeleton) -> tuple[Pose, list[str]]:
@@ -181,10 +204,8 @@ def _read_pose_fields(r: _Reader, fields: dict, at: tuple, skeleton: Skeleton) -
 
 def _read_library(r: _Reader, entries, skeleton: Skeleton, warnings: list[str]) -> tuple[tuple[str, Pose], ...]:
     """The ``library`` list: one mapping per named pose (``name`` and the pose fields); names unique."""
-    if not isinstance(entries, list):
-        r.fail((_LIBRARY_KEY,), f"must be a list of named poses, got {_show(entries)}")
     out: list[tuple[str, Pose]] = []
-    for i, entry in enumerate(entries):
+    for i, entry in enumerate(r.items(entries, (_LIBRARY_KEY,), "named poses")):
         at = (_LIBRARY_KEY, i)
         fields = r.mapping(entry, at, ("name", *_POSE_KEYS))
         name = r.name(fields["name"], at + ("name",))

@@ -3,24 +3,13 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from gsik.errors import PoseError
 from gsik.io.files import atomic_write_text
-from gsik.io.yaml_safe import yaml_string
-from gsik.io.pose.model import _LIBRARY_KEY, POSE_FORMAT, Pose
-
-
-def _num(x: float) -> str:
-    """The shortest text YAML reads back as exactly ``x`` (PyYAML needs a dot before an exponent)."""
-    text = repr(float(x))
-    if "e" in text and "." not in text:
-        text = text.replace("e", ".0e")
-    return text
-
-
-def _list(values) -> str:
-    return "[" + ", ".join(_num(v) for v in values) + "]"
+from gsik.io.pose.model import _LIBRARY_KEY, POSE_FORMAT, Clip, KeySequence, Pole, Pose
+from gsik.io.pose.sequence import clip_lines, keys_lines, num as _num, num_list as _list, poles_lines
+from gsik.io.yaml_safe import MAX_CHARS, MAX_VALUES, load_yaml, yaml_string
 
 
 def _pose_lines(pose: Pose, indent: str) -> list[str]:
@@ -48,10 +37,17 @@ def _pose_lines(pose: Pose, indent: str) -> list[str]:
     return [indent + line for line in out]
 
 
-def pose_to_yaml(pose: Pose, library: Sequence[tuple[str, Pose]] = ()) -> str:
-    """The YAML text of ``pose`` (the format of the module docstring), with a ``library`` list of named poses if any."""
+def pose_to_yaml(pose: Pose, library: Sequence[tuple[str, Pose]] = (), keys: KeySequence | None = None,
+                 poles: Mapping[str, Pole] | None = None, clip: Clip | None = None) -> str:
+    """The YAML text of ``pose`` (the format of :mod:`gsik.io.pose`), with what else the file keeps, if any:
+    a ``library`` list of named poses, a ``keys`` sequence, ``poles`` and a ``clip``.
+
+    Raises:
+        PoseError: a library pose, key or clip is for another skeleton, or the text would be longer than the
+            bounded reader reads back (:data:`gsik.io.yaml_safe.MAX_CHARS`: a clip of too many frames).
+    """
     out = [
-        "# gsik pose (format documented in gsik/pose.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
+        "# gsik pose (format: gsik/io/pose/__init__.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
         f"format: {POSE_FORMAT}",
         f"skeleton: {yaml_string(pose.skeleton)}",
         *_pose_lines(pose, ""),
@@ -63,15 +59,49 @@ def pose_to_yaml(pose: Pose, library: Sequence[tuple[str, Pose]] = ()) -> str:
                 raise PoseError(f"library pose {name!r} is for skeleton {p.skeleton!r}, not {pose.skeleton!r}")
             lines = _pose_lines(p, "    ")
             out += [f"  - name: {yaml_string(name)}", *lines]
-    return "\n".join(out) + "\n"
+    _check_skeletons(pose.skeleton, keys, clip)
+    if keys is not None:
+        out += keys_lines(keys, _pose_lines)
+    out += poles_lines(poles or {})
+    if clip is not None:
+        out += clip_lines(clip)
+    text = "\n".join(out) + "\n"
+    _check_readable(text, clip)
+    return text
 
 
-def write_pose(path: str | os.PathLike, pose: Pose, library: Sequence[tuple[str, Pose]] = ()) -> None:
-    """Write ``pose`` (and a ``library`` of named poses, if any) to ``path`` atomically (temporary file, fsync, rename).
+def _check_readable(text: str, clip: Clip | None) -> None:
+    """PoseError unless the bounded reader reads ``text`` back (a clip of too many frames)."""
+    if len(text) <= min(MAX_CHARS, MAX_VALUES):  # every value takes a character: no limit can be reached
+        return
+    what = f" (the clip {clip.name!r} has {clip.motion.n_frames} frames)" if clip is not None else ""
+    try:
+        load_yaml(text, "the pose file", PoseError)
+    except PoseError as exc:
+        raise PoseError(f"{exc}{what}; a pose file must stay within what gsik reads back: discard or shorten the "
+                        f"clip to save") from None
+
+
+def _check_skeletons(skeleton: str, keys: KeySequence | None, clip: Clip | None) -> None:
+    """Every key and the clip are of the pose's skeleton (PoseError naming the first that is not)."""
+    parts = [(f"key at frame {f}", p.skeleton) for f, p in keys.keys] if keys is not None else []
+    if clip is not None:
+        parts.append((f"clip {clip.name!r}", clip.motion.skeleton.name))
+    for what, name in parts:
+        if name != skeleton:
+            raise PoseError(f"{what} is for skeleton {name!r}, not {skeleton!r}")
+
+
+def write_pose(path: str | os.PathLike, pose: Pose, library: Sequence[tuple[str, Pose]] = (),
+               keys: KeySequence | None = None, poles: Mapping[str, Pole] | None = None,
+               clip: Clip | None = None) -> None:
+    """Write ``pose`` (and a ``library``, ``keys``, ``poles``, ``clip``, if any: see :func:`pose_to_yaml`) to
+    ``path`` atomically (temporary file, fsync, rename).
 
     Raises:
         GsikFileError: the file cannot be written; an existing file is left untouched.
+        PoseError: see :func:`pose_to_yaml`; nothing was written.
     """
     if not isinstance(pose, Pose):
         raise PoseError(f"write_pose needs a Pose, got {type(pose).__name__}")
-    atomic_write_text(path, pose_to_yaml(pose, library))
+    atomic_write_text(path, pose_to_yaml(pose, library, keys, poles, clip))
