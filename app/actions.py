@@ -47,9 +47,12 @@ ACTIONS: tuple[ActionSpec, ...] = (
     ActionSpec("save", "&Save", lambda w: w.files.save(), K.Save, "Save the pose", S.SP_DialogSaveButton),
     ActionSpec("save_as", "Save &As…", lambda w: w.files.save_as(), "Ctrl+Shift+S", "Save the pose to a new file"),
     ActionSpec("import_clip", "Import BVH &clip…", lambda w: w.files.import_clip_dialog(), None,
-               "Import a BVH clip onto the timeline (a clip of another skeleton opens a new document)"),
+               "Import a BVH clip onto the timeline (a clip of another skeleton becomes a new document here)"),
     ActionSpec("import_skeleton", "Import s&keleton…", lambda w: w.files.import_skeleton_dialog(), None,
-               "A new document on a skeleton from a YAML or URDF file"),
+               "A new document in this window on a skeleton from a YAML or URDF file"),
+    ActionSpec("import_skeleton_window", "Import skeleton in new &window…",
+               lambda w: w.files.import_skeleton_dialog(new_window=True), None,
+               "A new window on a skeleton from a YAML or URDF file (this document stays open here)"),
     ActionSpec("export_bvh", "&Export BVH…", lambda w: w.files.export_bvh_dialog(), None,
                "Export the clip, the keyed sequence or the pose as BVH"),
     ActionSpec("screenshot", "Screens&hot…", lambda w: w.screenshot_dialog(), None, "Save a picture of the window",
@@ -86,8 +89,8 @@ ACTIONS: tuple[ActionSpec, ...] = (
 
 #: Menus: (title, entries); an entry names an action or a submenu, None is a separator.
 MENUS = (
-    ("&File", ("new", "open", "recent", None, "save", "save_as", None, "import_clip", "import_skeleton", "export_bvh",
-               None, "screenshot", None, "quit")),
+    ("&File", ("new", "open", "recent", None, "save", "save_as", None, "import_clip", "import_skeleton",
+               "import_skeleton_window", "export_bvh", None, "screenshot", None, "quit")),
     ("&Edit", ("undo", "redo")),
     ("&Pose", ("root_left", "root_right", None, "reset", "random", "mirror_lr", "mirror_rl", "walk", "scenarios")),
     ("&View", ("frame", "frame_selected", None, *(f"view_{n}" for n, _ in VIEW_KEYS), None, "trackball", "sticks")),

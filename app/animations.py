@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from PySide6 import QtWidgets
+from PySide6 import QtGui, QtWidgets
 
 import gsik
 from gsik.anim import scenarios
@@ -12,9 +12,9 @@ from gsik.io.pose import Pose
 from gsik_studio.widgets import nice
 
 
-def scenario_menu(parent: QtWidgets.QWidget, skeleton: gsik.Skeleton, play: Callable[[str], None]) -> QtWidgets.QMenu:
-    """A "Scenarios" menu with one entry per built-in scenario (disabled, saying why, where one does not fit)."""
-    menu = QtWidgets.QMenu("Scenarios", parent)
+def fill_scenario_menu(menu: QtWidgets.QMenu, skeleton: gsik.Skeleton, play: Callable[[str], None]) -> None:
+    """Make ``menu`` hold one entry per built-in scenario (disabled, saying why, where one does not fit ``skeleton``)."""
+    menu.clear()
     menu.setToolTipsVisible(True)
     for name in scenarios.SCENARIO_NAMES:
         a = menu.addAction(nice(name))
@@ -24,10 +24,14 @@ def scenario_menu(parent: QtWidgets.QWidget, skeleton: gsik.Skeleton, play: Call
             a.setEnabled(False)
             a.setToolTip(str(exc))
         a.triggered.connect(lambda _c=False, n=name: play(n))
+
+
+def scenarios_action(menu: QtWidgets.QMenu) -> QtGui.QAction:
+    """The toolbar's action of the "Scenarios" menu, with its icon and tooltip."""
     a = menu.menuAction()
-    a.setIcon(parent.style().standardIcon(QtWidgets.QStyle.SP_FileDialogDetailedView))
+    a.setIcon(menu.style().standardIcon(QtWidgets.QStyle.SP_FileDialogDetailedView))
     a.setToolTip("Load a test scenario (targets from the paper's poses) and watch it solve")
-    return menu
+    return a
 
 
 def scenario_start(skeleton: gsik.Skeleton, name: str) -> tuple[scenarios.Scenario, Pose]:

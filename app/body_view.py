@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
-import vtk
+from vtkmodules.vtkRenderingCore import vtkRenderer
 
 from gsik_studio.mannequin import Mannequin
 from gsik_studio.scene import glyph_actor, points_view, rgb8, set_colors, touch
@@ -25,9 +25,9 @@ BODY_MODES = ("mannequin", "sticks")
 OVERLAID = ("gizmos", "effectors", "triads", "errors")
 
 
-def overlay_renderer(plotter) -> vtk.vtkRenderer:
+def overlay_renderer(plotter) -> vtkRenderer:
     """A renderer drawn over ``plotter``'s own (layer 1, same camera, depth cleared): what it shows is never hidden."""
-    ren = vtk.vtkRenderer()
+    ren = vtkRenderer()
     ren.SetLayer(1)
     ren.SetActiveCamera(plotter.renderer.GetActiveCamera())
     ren.InteractiveOff()

@@ -27,14 +27,17 @@ class FileActions:
         stop_playback: Ends a running playback before the document is replaced.
         opened: Called after a file was opened (the window frames the character).
         open_document: Shows a new document in a window of its own (an imported skeleton); returns the window.
+        show_document: Shows a new document in this window instead of ``doc`` (an imported skeleton); the
+            window sets :attr:`doc` to it.
     """
 
-    def __init__(self, parent: QtWidgets.QWidget, doc: Document, settings: QtCore.QSettings,
+    def __init__(self, parent: QtWidgets.QWidget, doc: Document | None, settings: QtCore.QSettings,
                  show_message: Callable[[str, int], None], stop_playback: Callable[[], None],
-                 opened: Callable[[], None], open_document: Callable[[Document], object] = lambda doc: None):
+                 opened: Callable[[], None], open_document: Callable[[Document], object] = lambda doc: None,
+                 show_document: Callable[[Document], None] = lambda doc: None):
         self.parent, self.doc, self.settings = parent, doc, settings
         self._message, self._stop_playback, self._opened = show_message, stop_playback, opened
-        self._open_document = open_document
+        self._open_document, self._show_document = open_document, show_document
         self.recent_menu = QtWidgets.QMenu("Open &Recent", parent)
         self.update_recent_menu()
 
@@ -125,9 +128,10 @@ class FileActions:
         path = self._path("Import BVH clip", BVH_FILTER)
         return self.import_clip_path(path) if path else False
 
-    def import_clip_path(self, path: str) -> object:
+    def import_clip_path(self, path: str, new_window: bool = False) -> object:
         """Put a BVH clip on the timeline and play it: on this document when it is of this skeleton, else on
-        a new document of the clip's skeleton (its window is returned). False, saying why, on a bad file."""
+        a new document of the clip's skeleton, shown in this window (asking first about unsaved changes; True)
+        or with ``new_window`` in a window of its own (returned). False, saying why, on a bad file or a "Cancel"."""
         try:
             imported = transfer.read_clip(path)
         except gsik.GsikError as exc:
@@ -138,31 +142,51 @@ class FileActions:
         if motion is None:  # another skeleton: a document of its own
             doc = transfer.document_for(imported.skeleton)
             doc.timeline.load(imported.motion, name, f"Import {name}")
-            window = self._open_document(doc)
+            shown = self._show_new(doc, new_window, "import a clip of another skeleton")
+            if shown is False:
+                return False
             doc.timeline.play()
             self._message(f"Imported {name} on its own skeleton ({transfer.describe(imported.skeleton)})",
                           8000)
-            return window
+            return shown
         self._stop_playback()
         self.doc.timeline.load(motion, name, f"Import {name}")
         self.doc.timeline.play()
         self._message(f"Imported {name}: {motion.n_frames} frames on the timeline", 8000)
         return True
 
-    def import_skeleton_dialog(self) -> object:
+    def import_skeleton_dialog(self, new_window: bool = False) -> object:
+        if not new_window and not self.confirm_discard("import another skeleton"):
+            return False
         path = self._path("Import skeleton", SKELETON_FILTER)
-        return self.import_skeleton_path(path) if path else False
+        return self.import_skeleton_path(path, new_window, confirm=False) if path else False
 
-    def import_skeleton_path(self, path: str) -> object:
-        """A new document on the skeleton of a YAML or URDF file, in a window of its own (returned); False on error."""
+    def import_skeleton_path(self, path: str, new_window: bool = False, confirm: bool = True) -> object:
+        """A new document on the skeleton of a YAML or URDF file, shown in this window instead of the current one
+        (asking first about unsaved changes unless ``confirm`` is False; True) or with ``new_window`` in a window
+        of its own (returned). False, saying why, on a bad file or a "Cancel"."""
         try:
             skeleton = transfer.read_skeleton(path)
             doc = transfer.document_for(skeleton)
         except gsik.GsikError as exc:
             return self._failed(f"Could not import {os.path.basename(path)}: {exc}", "Could not import skeleton",
                                 f"The skeleton could not be loaded; nothing was changed.\n\n{exc}")
-        self._message(f"New document on {transfer.describe(skeleton)}", 8000)
-        return self._open_document(doc)
+        shown = self._show_new(doc, new_window, "import another skeleton" if confirm else None)
+        if shown is not False:
+            self._message(f"New document on {transfer.describe(skeleton)}", 8000)
+        return shown
+
+    def _show_new(self, doc: Document, new_window: bool, action: str | None) -> object:
+        """Show a new document in a window of its own (returned) or in this one (True; False when the question
+        about unsaved changes before ``action`` was cancelled; None asks nothing)."""
+        if new_window:
+            return self._open_document(doc)
+        if action is not None and not self.confirm_discard(action):
+            return False
+        self._stop_playback()
+        self._show_document(doc)
+        self._opened()
+        return True
 
     def export_bvh_dialog(self) -> bool:
         path = self._path("Export BVH", BVH_FILTER, "motion.bvh")

@@ -106,18 +106,24 @@ def open_window(app, args: argparse.Namespace, size: tuple[int, int]):
 
     ``--size`` and ``--view``, when given, win over the remembered geometry and the default view.
     """
-    from gsik_studio.starting import StartWindow, load_document
+    from gsik_studio.starting import StartWindow, load_document, mark
 
+    mark("python and qt")
     start = StartWindow(size)
     start.show()
+    app.processEvents()
+    mark("start window")
     doc = load_document(app, start)
     from gsik_studio.window import MainWindow
 
     window = MainWindow(doc)
+    mark("window built")
     if args.size or window.settings.value("window/geometry") is None:
         window.resize(*size)
     window.show()
     start.close()
+    app.processEvents()  # the first paint: the 3D view renders once
+    mark("first frame")
     if args.view:
         window.set_view(args.view)
     return window

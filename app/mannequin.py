@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 import pyvista as pv
-import vtk
+from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 import gsik
@@ -191,15 +191,15 @@ class BodyMesh:
         self.polydata.GetPointData().GetArray("Normals").Modified()
 
 
-def _solid_actor(pd: pv.PolyData) -> vtk.vtkActor:
+def _solid_actor(pd: pv.PolyData) -> vtkActor:
     """A plain mapper and actor (no pyvista pipeline in between): per-point RGB, the PolyData's own normals."""
-    mapper = vtk.vtkPolyDataMapper()
+    mapper = vtkPolyDataMapper()
     mapper.SetInputData(pd)
     mapper.SetScalarModeToUsePointFieldData()
     mapper.SelectColorArray("colors")
     mapper.SetColorModeToDirectScalars()
     mapper.ScalarVisibilityOn()
-    actor = vtk.vtkActor()
+    actor = vtkActor()
     actor.SetMapper(mapper)
     prop = actor.GetProperty()
     prop.SetSpecular(0.25)

@@ -7,7 +7,7 @@ each frame the spheres not being dragged go to their poles.
 
 from __future__ import annotations
 
-import vtk
+from vtkmodules.vtkInteractionWidgets import vtkSphereWidget
 
 from gsik_studio.scene import sphere_widget
 
@@ -29,7 +29,7 @@ class PoleGizmos:
         self.dragging: str | None = None
         self._drag = object()  # one token per mouse drag: its moves are one undo step
         pl = viewport.plotter
-        self.widgets: dict[str, vtk.vtkSphereWidget] = {}
+        self.widgets: dict[str, vtkSphereWidget] = {}
         for name in self.controls.pole_joints:
             w = sphere_widget(pl, POLE_RADIUS, POLE_COLOR, POLE_SELECTED_COLOR, (14, 10))
             w.AddObserver("StartInteractionEvent", lambda _w, _e, n=name: self._start(n))

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
-import vtk
+from vtkmodules.vtkInteractionWidgets import vtkSphereWidget
+from vtkmodules.vtkRenderingCore import vtkActor, vtkGlyph3DMapper
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 
@@ -31,7 +32,7 @@ def touch(pd: pv.PolyData) -> None:
 def glyph_actor(points: pv.PolyData, radius: float, colors: np.ndarray | None, color=None):
     """A vtkGlyph3DMapper actor drawing one sphere per point (per-point RGB colours if given)."""
     sphere = pv.Sphere(radius=radius, theta_resolution=14, phi_resolution=10)
-    mapper = vtk.vtkGlyph3DMapper()
+    mapper = vtkGlyph3DMapper()
     mapper.SetInputData(points)
     mapper.SetSourceData(sphere)
     mapper.ScalingOff()
@@ -44,7 +45,7 @@ def glyph_actor(points: pv.PolyData, radius: float, colors: np.ndarray | None, c
         mapper.ScalarVisibilityOn()
     else:
         mapper.ScalarVisibilityOff()
-    actor = vtk.vtkActor()
+    actor = vtkActor()
     actor.SetMapper(mapper)
     prop = actor.GetProperty()
     if color is not None:
@@ -55,9 +56,9 @@ def glyph_actor(points: pv.PolyData, radius: float, colors: np.ndarray | None, c
 
 
 def sphere_widget(plotter, radius: float, color, selected_color, resolution: tuple[int, int] = (20, 14),
-                  opacity: float = 1.0) -> vtk.vtkSphereWidget:
+                  opacity: float = 1.0) -> vtkSphereWidget:
     """A draggable sphere widget (surface, no scaling, picked before the camera moves), off until ``On()``."""
-    w = vtk.vtkSphereWidget()
+    w = vtkSphereWidget()
     w.SetInteractor(plotter.iren.interactor)
     w.SetCurrentRenderer(plotter.renderer)
     w.SetRepresentationToSurface()

@@ -8,10 +8,22 @@ thread; the GUI thread keeps the start window painted and its text current.
 
 from __future__ import annotations
 
+import os
+import sys
 import threading
 import time
 
 from PySide6 import QtCore, QtWidgets
+
+#: Set to anything to have the studio print when each start-up stage ended (``benchmarks/bench_window.py`` reads it).
+TIMES_VARIABLE = "GSIK_STUDIO_TIMES"
+
+
+def mark(stage: str) -> None:
+    """Say on stderr that start-up ``stage`` just ended, as seconds since the epoch, when :data:`TIMES_VARIABLE`
+    is set (``gsik-studio-time <stage> <seconds>``); else nothing."""
+    if os.environ.get(TIMES_VARIABLE):
+        print(f"gsik-studio-time {stage} {time.time():.4f}", file=sys.stderr, flush=True)
 
 STAGES = {
     "view": "Loading the 3D view (VTK, PyVista)…",
@@ -51,14 +63,20 @@ def _load(out: dict, stage: list) -> None:
         import pyvista as pv
         import pyvistaqt  # noqa: F401 (imported here, off the GUI thread)
 
+        import gsik_studio.body_view  # noqa: F401 (the 3D scene's modules and their VTK widgets)
+        import gsik_studio.viewport  # noqa: F401
+
         pv.global_theme.multi_samples = 0
+        mark("view")
         stage.append("solver")
         from gsik_studio.model import Document
 
         doc = Document()
+        mark("solver")
         stage.append("kernels")
         for _ in range(2):
             doc.step()
+        mark("kernels")
         out["doc"] = doc
     except BaseException as exc:  # shown by the GUI thread
         out["error"] = exc

@@ -26,7 +26,9 @@ from collections.abc import Callable
 
 import numpy as np
 import pyvista as pv
-import vtk
+from vtkmodules.vtkCommonTransforms import vtkTransform
+from vtkmodules.vtkInteractionWidgets import vtkBoxWidget
+from vtkmodules.vtkRenderingCore import vtkBillboardTextActor3D, vtkTextActor
 
 from gsik.rotations import quaternion_from_matrix, transform
 from gsik_studio import camera
@@ -195,7 +197,7 @@ class Viewport:
             self.target_widgets.append(w)
 
         # Orientation handle for the selected target: a rotate-only box widget.
-        box = vtk.vtkBoxWidget()
+        box = vtkBoxWidget()
         box.SetInteractor(pl.iren.interactor)
         box.SetCurrentRenderer(pl.renderer)
         box.SetPlaceFactor(1.0)
@@ -217,14 +219,14 @@ class Viewport:
         self.box_widget = box
 
         # Label of the selected target, and the root / status text.
-        self._label = vtk.vtkBillboardTextActor3D()
+        self._label = vtkBillboardTextActor3D()
         self._label.GetTextProperty().SetFontSize(16)
         self._label.GetTextProperty().SetColor(1.0, 0.85, 0.85)
         self._label.GetTextProperty().SetBold(True)
         self._label.SetDisplayOffset(14, 10)
         self._label.VisibilityOff()
         pl.add_actor(self._label, reset_camera=False, pickable=False)
-        self._corner = vtk.vtkTextActor()
+        self._corner = vtkTextActor()
         tp = self._corner.GetTextProperty()
         tp.SetFontSize(15)
         tp.SetColor(0.88, 0.90, 0.93)
@@ -264,7 +266,7 @@ class Viewport:
         name = self.selected
         if self._syncing or name is None or name not in self.doc.targets:
             return
-        t = vtk.vtkTransform()
+        t = vtkTransform()
         self.box_widget.GetTransform(t)
         M = np.array([[t.GetMatrix().GetElement(i, j) for j in range(4)] for i in range(4)])
         u, _, vt = np.linalg.svd(M[:3, :3])
@@ -382,7 +384,7 @@ class Viewport:
             self._label.VisibilityOff()
             return
         if self._drag_kind != "rotate":  # the box being turned turns itself
-            tr = vtk.vtkTransform()
+            tr = vtkTransform()
             tr.SetMatrix(transform(t.rotation, np.array(t.position)).ravel())
             self.box_widget.SetTransform(tr)
         if not self.box_widget.GetEnabled():

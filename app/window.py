@@ -1,7 +1,8 @@
 """The main window of gsik-studio: the assembly of viewport, panels, actions, file commands and read-outs.
 
 The window owns a :class:`gsik_studio.model.Document`, the :class:`gsik_studio.model.FrameLoop`
-that steps it and a :class:`gsik_studio.viewport.Viewport` that draws it. Each
+that steps it and a :class:`gsik_studio.viewport.Viewport` that draws it; :meth:`MainWindow.show_document`
+rebuilds them, the panels and the read-outs around another document (an imported skeleton). Each
 panel binds itself to the document's typed events and shows values inside
 signal blockers, so that showing a value never writes it back.
 
@@ -28,12 +29,7 @@ from gsik_studio.model import Document, FrameLoop, Playback
 from gsik_studio.model.joints import JointEditor
 from gsik_studio.qt_compat import protect_none
 from gsik_studio.widgets import nice
-from gsik_studio.widgets.balance_panel import balance_panel
-from gsik_studio.widgets.effectors import EffectorsPanel
-from gsik_studio.widgets.joint_panel import JointPanel
-from gsik_studio.widgets.library import LibraryPanel
-from gsik_studio.widgets.selected import SelectedTargetPanel
-from gsik_studio.widgets.solver_panel import solver_panel
+from gsik_studio.widgets.side_panel import SidePanel
 from gsik_studio.widgets.status import StatusReadouts
 from gsik_studio.widgets.timeline_bar import TimelineBar
 
@@ -57,102 +53,110 @@ class MainWindow(QtWidgets.QMainWindow):
         super().__init__(parent)
         import pyvista as pv
 
-        from gsik_studio.view_widget import ViewWidget
-        from gsik_studio.balance_view import BalanceView
-        from gsik_studio.body_view import BodyView
-        from gsik_studio.joint_rings import JointRings
-        from gsik_studio.pole_gizmos import PoleGizmos
-        from gsik_studio.viewport import Viewport
-
         pv.global_theme.multi_samples = 0  # software GL: multisampling costs 3-5x
         self.settings = settings if settings is not None else QtCore.QSettings("gsik", "gsik-studio")
-        self.doc = doc if doc is not None else Document()
-        self.loop = FrameLoop(self.doc)
         self.run_timers = run_timers
         self.others: list[MainWindow] = []  # windows of documents imported from this one
-
-        self.plotter = ViewWidget(self, auto_update=False, multi_samples=0)
-        self.plotter.installEventFilter(self)  # VTK's own key bindings ('e', 'q', 'w', ...) are not wanted
-        self.setCentralWidget(self.plotter)
-        self.viewport = Viewport(self.plotter, self.doc)
-        self.plotter.snap_press = self.viewport.snap_offset  # a click a few pixels off a target grabs it
-        self.body = BodyView(self.viewport)
-        self.balance_view = BalanceView(self.doc, self.body.overlay)
-        self.viewport.layers.append(self.balance_view)
-        self.poles = PoleGizmos(self.viewport)
-        self.joints = JointEditor(self.doc)
-        self.rings = JointRings(self.viewport, self.joints)
-        self.files = FileActions(self, self.doc, self.settings, self.statusBar().showMessage, self.stop_playback,
-                                 self._show_opened, self.open_document)
-        self._make_actions()
-        self._make_panel()
-        self._make_timeline_bar()
-        self.status = StatusReadouts(self.statusBar(), self.doc, self.loop)
+        self.plotter = self.status = None
         self.timer = QtCore.QTimer(self)
         self.timer.setInterval(FRAME_INTERVAL_MS)
         self.timer.timeout.connect(self.tick)
         self.play_timer = QtCore.QTimer(self)
         self.play_timer.setInterval(FRAME_INTERVAL_MS)
         self.play_timer.timeout.connect(self._play_tick)
-        self._connect()
+        self.files = FileActions(self, None, self.settings, self.statusBar().showMessage, self.stop_playback,
+                                 self._show_opened, self.open_document, self.show_document)
+        self.scenario_menu = QtWidgets.QMenu("Scenarios", self)
+        self._make_actions()
+        self.pose_dock = self._dock("Pose", "pose_panel", Qt.RightDockWidgetArea)
+        self.timeline_dock = self._dock("Timeline", "timeline_panel", Qt.BottomDockWidgetArea)
+        self.show_document(doc if doc is not None else Document())
         self._restore_geometry()
-        self.set_orbit(str(self.settings.value("view/orbit", "turntable")))
 
+    def show_document(self, doc: Document) -> None:
+        """Show ``doc`` in this window: the scene, panels, timeline and read-outs are built for its skeleton.
+
+        The document shown before is dropped (its file commands ask about unsaved changes first).
+        """
+        from gsik_studio.balance_view import BalanceView
+        from gsik_studio.body_view import BodyView
+        from gsik_studio.joint_highlight import JointHighlight
+        from gsik_studio.joint_rings import JointRings
+        from gsik_studio.pole_gizmos import PoleGizmos
+        from gsik_studio.view_widget import ViewWidget
+        from gsik_studio.viewport import Viewport
+
+        self.timer.stop()
+        self.play_timer.stop()
+        if self.plotter is not None:
+            self.doc.timeline.pause()
+            self.plotter.close()
+        self.doc = self.files.doc = doc
+        self.loop = FrameLoop(doc)
+        self.plotter = ViewWidget(self, auto_update=False, multi_samples=0)
+        self.plotter.installEventFilter(self)  # VTK's own key bindings ('e', 'q', 'w', ...) are not wanted
+        self.setCentralWidget(self.plotter)
+        self.viewport = Viewport(self.plotter, doc)
+        self.plotter.snap_press = self.viewport.snap_offset  # a click a few pixels off a target grabs it
+        self.body = BodyView(self.viewport)
+        self.balance_view = BalanceView(doc, self.body.overlay)
+        self.viewport.layers.append(self.balance_view)
+        self.poles = PoleGizmos(self.viewport)
+        self.joints = JointEditor(doc)
+        self.rings = JointRings(self.viewport, self.joints)
+        self.joint_highlight = JointHighlight(self.viewport, self.joints, self.body.overlay)
+        self.body.set_mode("sticks" if self.act_sticks.isChecked() else "mannequin")  # the view's options stay
+        self.loop.set_paused(self.act_pause.isChecked())
+        self.set_orbit(str(self.settings.value("view/orbit", "turntable")))
+        animations.fill_scenario_menu(self.scenario_menu, doc.skeleton, self.play_scenario)
+        self._make_panel()
+        self._make_timeline_bar()
+        if self.status is not None:
+            self.status.remove()
+        self.status = StatusReadouts(self.statusBar(), doc, self.loop)
+        self._connect()
         for _ in range(2):  # compiles / loads the numba kernels now, not on the first drag
-            self.doc.step()
-        self.viewport.select("left_hand" if "left_hand" in self.doc.targets else None)
+            doc.step()
+        self.viewport.select("left_hand" if "left_hand" in doc.targets else None)
         self._show_all()
         self.loop.wake()
 
     # -- assembly -----------------------------------------------------------------------
     def _make_actions(self) -> None:
-        self.scenario_menu = animations.scenario_menu(self, self.doc.skeleton, self.play_scenario)
         actions = make_actions(self)
         for name, action in actions.items():  # act_open, act_undo, ... (the names of actions.ACTIONS)
             setattr(self, f"act_{name}", action)
         self.act_views = {n: actions[f"view_{n}"] for n, _ in VIEW_KEYS}
-        self.act_scenarios = self.scenario_menu.menuAction()
+        self.act_scenarios = animations.scenarios_action(self.scenario_menu)
         menus = {"recent": self.files.recent_menu, "scenarios": self.scenario_menu}
         make_menus(self, actions, menus)
         self.toolbar = make_toolbar(self, actions, menus)
 
-    def _make_panel(self) -> None:
-        panel = QtWidgets.QWidget()
-        layout = QtWidgets.QVBoxLayout(panel)
-        layout.setContentsMargins(8, 8, 8, 8)
-        layout.setSpacing(10)
-        self.effectors = EffectorsPanel(self.doc, self.viewport.select)
-        self.selected = SelectedTargetPanel(self.doc, lambda: self.viewport.selected)
-        self.joint_panel = JointPanel(self.joints)
-        self.solver_panel = solver_panel(self.doc, self.settings)
-        self.solver_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
-        self.solver_panel.restore()
-        self.balance_panel = balance_panel(self.doc, self.settings, self.show_support)
-        self.balance_panel.rejected.connect(lambda text: self.statusBar().showMessage(text, 5000))
-        self.balance_panel.restore()
-        self.library_panel = LibraryPanel(self.doc, lambda text: self.statusBar().showMessage(text, 6000))
-        for box in (self.effectors, self.selected, self.joint_panel, self.balance_panel, self.library_panel,
-                    self.solver_panel):
-            layout.addWidget(box)
-        layout.addStretch(1)
-        scroll = QtWidgets.QScrollArea()
-        scroll.setWidget(panel)
-        scroll.setWidgetResizable(True)
-        scroll.setFrameShape(QtWidgets.QFrame.NoFrame)
-        dock = QtWidgets.QDockWidget("Pose", self)
-        dock.setObjectName("pose_panel")
-        dock.setWidget(scroll)
+    def _dock(self, title: str, name: str, area: Qt.DockWidgetArea) -> QtWidgets.QDockWidget:
+        dock = QtWidgets.QDockWidget(title, self)
+        dock.setObjectName(name)
         dock.setFeatures(QtWidgets.QDockWidget.DockWidgetMovable | QtWidgets.QDockWidget.DockWidgetFloatable)
-        dock.setMinimumWidth(440)
-        self.addDockWidget(Qt.RightDockWidgetArea, dock)
+        self.addDockWidget(area, dock)
+        return dock
+
+    def _set_dock_widget(self, dock: QtWidgets.QDockWidget, widget: QtWidgets.QWidget) -> None:
+        old = dock.widget()
+        dock.setWidget(widget)
+        if old is not None:
+            old.deleteLater()
+
+    def _make_panel(self) -> None:
+        message = self.statusBar().showMessage
+        side = SidePanel(self.doc, self.joints, self.settings, self.viewport.select, lambda: self.viewport.selected,
+                         self.show_support, message)
+        for name in SidePanel.PARTS:  # self.effectors, self.balance_panel, ...
+            setattr(self, name, getattr(side, name))
+        self._set_dock_widget(self.pose_dock, side)
+        self.pose_dock.setMinimumWidth(side.dock_width())
 
     def _make_timeline_bar(self) -> None:
         self.timeline_bar = TimelineBar(self.doc.timeline, lambda text: self.statusBar().showMessage(text, 6000))
-        dock = QtWidgets.QDockWidget("Timeline", self)
-        dock.setObjectName("timeline_panel")
-        dock.setWidget(self.timeline_bar)
-        dock.setFeatures(QtWidgets.QDockWidget.DockWidgetMovable | QtWidgets.QDockWidget.DockWidgetFloatable)
-        self.addDockWidget(Qt.BottomDockWidgetArea, dock)
+        self._set_dock_widget(self.timeline_dock, self.timeline_bar)
 
     def _connect(self) -> None:
         ev = self.doc.events

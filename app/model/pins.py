@@ -22,6 +22,7 @@ import gsik
 from gsik import balance, control
 from gsik.targets import Target
 from gsik_studio.model.events import Signal
+from gsik_studio.model.posture import Posture
 
 PINNED = 0  #: priority level of a pinned target
 FREE = 1  #: priority level of an unpinned target
@@ -63,7 +64,8 @@ class Support(NamedTuple):
 
 
 class SolveControls:
-    """Posture strength and balance of a document's solver, its pole targets, the centre of mass and support read-outs.
+    """Posture (strength, natural or rest) and balance of a document's solver, its pole targets, the centre of mass
+    and support read-outs.
 
     Pole targets are position-only targets on knees and elbows at level
     :data:`POLE`: dragging one swings the limb's bend towards it without moving
@@ -76,14 +78,15 @@ class SolveControls:
         edit: Runs a change as one undo step (the document's ``_edit(text, apply, merge_key, signal)``).
 
     Attributes:
-        changed: Signal() after the posture strength, balance or a pole changed.
+        posture: The :class:`gsik_studio.model.posture.Posture` (natural or rest, and its strength).
+        changed: Signal() after the posture (strength, natural), balance or a pole changed.
     """
 
     def __init__(self, solver: gsik.Solver, push: Callable[[], None], edit: Callable[..., None]):
         self._solver = solver
         self._push = push
         self._edit = edit
-        self.posture_strength = 0.0
+        self.posture = Posture(solver)  # natural (the bundled prior) when there is one
         self._poles: dict[str, Target] = {}  # every pole placed so far, enabled or not
         self.changed = Signal()
 
@@ -154,13 +157,23 @@ class SolveControls:
     def balance(self) -> bool:
         return self._solver.balance
 
+    @property
+    def posture_strength(self) -> float:
+        return self.posture.strength
+
+    @property
+    def natural(self) -> bool:
+        """True while the learned pose prior is the posture (see :mod:`gsik_studio.model.posture`)."""
+        return self.posture.natural
+
     def set_posture_strength(self, strength: float) -> None:
-        """Prefer the rest pose with weight ``strength`` (>= 0, per DOF; 0 turns it off), below every target."""
-        s = float(strength)
-        if not np.isfinite(s) or s < 0.0:
-            raise gsik.SolverError(f"posture strength must be a number >= 0 (0: off), got {strength!r}")
-        self._solver.set_posture(None, s)
-        self.posture_strength = s
+        """Prefer the posture with weight ``strength`` (>= 0, per DOF; 0 turns it off), below every target."""
+        self.posture.set_strength(strength)
+        self.changed.emit()
+
+    def set_natural(self, on: bool) -> None:
+        """The learned pose prior (True) or the plain rest pose as the posture (SolverError without a prior)."""
+        self.posture.set_natural(on)
         self.changed.emit()
 
     def set_balance(self, on: bool) -> None:

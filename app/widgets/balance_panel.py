@@ -12,19 +12,21 @@ from gsik_studio.widgets.fields import Field, FieldForm
 
 CONTROL_FIELDS = (
     Field("posture_strength", "Posture strength", float, 0.0, 10.0, decimals=2, step=0.05,
-          tip="How much the body prefers its rest pose, below every target (0: off). It never costs accuracy: "
-              "it only chooses among the poses that meet the targets."),
+          tip="How much the body prefers its posture (natural or rest), below every target (0: off). It never costs "
+              "accuracy: it only chooses among the poses that meet the targets."),
 )
 
 
 def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Callable[[bool], None]) -> FieldForm:
     """The group bound to ``doc.controls``; ``show_support(on)`` shows or hides the centre of mass in the view.
 
-    The posture strength is remembered under ``controls/`` in ``settings``.
+    The posture strength and the natural toggle are remembered under ``controls/`` in ``settings``.
     """
     controls = doc.controls
     form = FieldForm("Posture and balance", CONTROL_FIELDS, lambda: controls,
                      lambda changes: controls.set_posture_strength(changes["posture_strength"]), settings, "controls")
+    form.natural = _natural_box(controls, settings)
+    form.layout().addRow(form.natural)
     form.balance = QtWidgets.QCheckBox("Balance: keep the centre of mass over the feet")
     form.balance.setToolTip("Holds the centre of mass's ground projection inside the support polygon, "
                             "below pinned targets and above unpinned ones")
@@ -55,6 +57,32 @@ def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Calla
     form.balance.toggled.connect(set_balance)
     form.show_com.toggled.connect(show_support)
     controls.changed.connect(form.show_model)
+    controls.changed.connect(lambda: _show_natural(form.natural, controls))
     controls.changed.connect(show_poles)
     show_poles()  # a document opened before the window may have poles on
     return form
+
+
+def _natural_box(controls, settings: QtCore.QSettings) -> QtWidgets.QCheckBox:
+    """The "natural posture" check box: the learned pose prior, or the plain rest pose (remembered)."""
+    box = QtWidgets.QCheckBox("Natural posture (learned from motion capture)")
+    box.setToolTip("On: the body prefers the likeliest human pose among those that meet the targets (a pose prior "
+                   "learned from motion capture). Off: it prefers the rest pose.")
+    box.setEnabled(controls.posture.can_be_natural)
+    if not box.isEnabled():
+        box.setToolTip("No pose prior is bundled for this skeleton: its posture is the rest pose")
+    elif str(settings.value("controls/natural", "true")).lower() == "false":
+        controls.set_natural(False)
+
+    def toggled(on: bool) -> None:
+        controls.set_natural(on)
+        settings.setValue("controls/natural", controls.natural)
+
+    box.toggled.connect(toggled)
+    _show_natural(box, controls)
+    return box
+
+
+def _show_natural(box: QtWidgets.QCheckBox, controls) -> None:
+    with QtCore.QSignalBlocker(box):
+        box.setChecked(controls.natural)

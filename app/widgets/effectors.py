@@ -13,7 +13,7 @@ from gsik_studio.model.pins import is_pinned, pin_level
 from gsik_studio.widgets import nice
 
 COLUMNS = (("", ""), ("on", "Enabled"), ("pin", "Pinned: a higher priority level than unpinned targets"),
-           ("weight", "Weight"), ("pos only", "Position only"),
+           ("weight", "Weight"), ("pos<br>only", "Position only"),
            ("pos err", "Position error [mm]"), ("rot err", "Orientation error [deg]"))
 
 
@@ -37,14 +37,14 @@ class EffectorRow:
         self.weight.setSingleStep(0.1)
         self.weight.setToolTip("Weight: relative importance in the least-squares solve")
         self.weight.setKeyboardTracking(False)
-        self.weight.setMaximumWidth(74)
+        self.weight.setMaximumWidth(68)
         self.position_only = QtWidgets.QCheckBox()
         self.position_only.setToolTip("Position only: ignore the target's orientation")
         self.position_error = QtWidgets.QLabel("–")
         self.orientation_error = QtWidgets.QLabel("–")
         for label in (self.position_error, self.orientation_error):
             label.setAlignment(Qt.AlignRight | Qt.AlignVCenter)
-            label.setMinimumWidth(46)
+            label.setMinimumWidth(42)
             label.setFont(QtGui.QFontDatabase.systemFont(QtGui.QFontDatabase.FixedFont))
 
     def widgets(self):

@@ -17,6 +17,7 @@ BUTTONS = (
     ("duplicate", "Duplicate", "Copy the selected pose"),
     ("delete", "Delete", "Delete the selected pose"),
 )
+BUTTONS_PER_ROW = 3
 
 
 def ask_name(parent: QtWidgets.QWidget, title: str, current: str) -> str | None:
@@ -42,14 +43,14 @@ class LibraryPanel(QtWidgets.QGroupBox):
         self.list = QtWidgets.QListWidget()
         self.list.setMinimumHeight(90)
         layout.addWidget(self.list)
-        row = QtWidgets.QHBoxLayout()
+        grid = QtWidgets.QGridLayout()  # two rows: five buttons in one would widen the side panel
         self.buttons: dict[str, QtWidgets.QPushButton] = {}
-        for name, label, tip in BUTTONS:
+        for i, (name, label, tip) in enumerate(BUTTONS):
             b = QtWidgets.QPushButton(label)
             b.setToolTip(tip)
-            row.addWidget(b)
+            grid.addWidget(b, i // BUTTONS_PER_ROW, i % BUTTONS_PER_ROW)
             self.buttons[name] = b
-        layout.addLayout(row)
+        layout.addLayout(grid)
         lib = doc.library
         self.buttons["add"].clicked.connect(lambda: self._run(lib.add))
         self.buttons["apply"].clicked.connect(lambda: self._on_selected(lib.apply))

@@ -32,7 +32,7 @@ class StatusReadouts:
     """Permanent labels in a status bar, refreshed on the frame loop's ``readouts`` and the document's ``pose``."""
 
     def __init__(self, status_bar: QtWidgets.QStatusBar, doc: Document, loop: FrameLoop):
-        self.doc, self.loop = doc, loop
+        self.doc, self.loop, self._bar = doc, loop, status_bar
         mono = QtGui.QFontDatabase.systemFont(QtGui.QFontDatabase.FixedFont)
         self.labels: dict[str, QtWidgets.QLabel] = {}
         for key, width in LABELS:
@@ -43,6 +43,12 @@ class StatusReadouts:
             self.labels[key] = lab
         doc.events.pose.connect(self.show_root)
         loop.events.readouts.connect(self.update)
+
+    def remove(self) -> None:
+        """Take the labels off the status bar (another document's read-outs replace them)."""
+        for lab in self.labels.values():
+            self._bar.removeWidget(lab)
+            lab.deleteLater()
 
     def show_root(self) -> None:
         self.labels["root"].setText(f"root: {nice(self.doc.root)}")

@@ -60,8 +60,60 @@ def test_keyed_sequence_exports_every_frame(qtbot, window, tmp_path):
     assert read_bvh(path).n_frames == 13
 
 
-def test_import_skeleton_from_urdf_opens_a_document_on_it(qtbot, window):
-    other = window.files.import_skeleton_path(os.path.join(DATA, "humanoid.urdf"))
+def _dialog_returns(monkeypatch, path):
+    from PySide6.QtWidgets import QFileDialog
+
+    monkeypatch.setattr(QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (path, "")))
+
+
+def _shows_skeleton(window, skeleton):
+    """True when the window's scene, panels, timeline and read-outs are those of a document on ``skeleton``."""
+    doc = window.doc
+    return (doc.skeleton is skeleton and window.loop.doc is doc and window.files.doc is doc
+            and window.viewport.doc is doc and window.joints.doc is doc and window.timeline_bar.timeline is doc.timeline
+            and set(window.rows) == set(skeleton.effector_sites)
+            and window.viewport._joints.n_points == len(skeleton.joint_frame)
+            and window.centralWidget() is window.plotter and window.status.doc is doc)
+
+
+def test_import_skeleton_rebuilds_this_window_asking_first_about_unsaved_changes(qtbot, window, boxes, monkeypatch):
+    from PySide6.QtWidgets import QMessageBox
+
+    _dialog_returns(monkeypatch, os.path.join(DATA, "humanoid.urdf"))
+    biped = window.doc
+    biped.random_pose(seed=5)
+    window.act_sticks.trigger()  # a view option: it stays for the new document
+    boxes["answer"] = QMessageBox.Cancel
+    window.act_import_skeleton.trigger()  # File -> Import skeleton..., unsaved changes: Cancel
+    assert len(boxes["question"]) == 1 and "import another skeleton" in boxes["question"][0][1]
+    assert window.doc is biped and biped.dirty
+    boxes["answer"] = QMessageBox.Discard
+    window.act_import_skeleton.trigger()
+    assert len(boxes["question"]) == 2 and not window.others
+    doc = window.doc
+    assert doc is not biped and doc.skeleton.name == "mini_humanoid" and doc.root == doc.skeleton.root
+    assert _shows_skeleton(window, doc.skeleton)
+    assert window.body.mode == "sticks" and window.act_sticks.isChecked()
+    assert set(doc.targets) == set(doc.skeleton.effector_sites) - {doc.root}
+    assert not window.act_root_left.isEnabled()  # no feet to pin
+    assert window.windowTitle().startswith("Untitled") and not doc.dirty and not window.act_undo.isEnabled()
+    assert "mini_humanoid" in window.statusBar().currentMessage()
+    name = sorted(doc.targets)[0]
+    doc.move_target(name, np.array(doc.targets[name].position) + [0.0, 0.0, -0.05])
+    assert window.timer.isActive()  # the new document's frame loop drives this window's timer
+    qtbot.waitUntil(lambda: not window.timer.isActive(), timeout=20000)
+    assert doc.last_result is not None
+    widget = window.viewport.target_widgets[window.viewport._sites.index(name)]
+    np.testing.assert_allclose(widget.GetCenter(), doc.targets[name].position, atol=1e-9)
+    window.act_undo.trigger()
+    assert not doc.dirty and window.doc is doc
+
+
+def test_import_skeleton_in_a_new_window_keeps_this_one(qtbot, window, monkeypatch):
+    _dialog_returns(monkeypatch, os.path.join(DATA, "humanoid.urdf"))
+    window.act_import_skeleton_window.trigger()  # File -> Import skeleton in new window...
+    assert len(window.others) == 1
+    other = window.others[0]
     try:
         qtbot.waitExposed(other)
         doc = other.doc
@@ -78,15 +130,15 @@ def test_import_skeleton_from_urdf_opens_a_document_on_it(qtbot, window):
         other.close()
 
 
-def test_import_a_clip_of_another_skeleton_plays_in_its_own_document(qtbot, window):
-    other = window.files.import_clip_path(os.path.join(DATA, "walk_zxy.bvh"))
-    try:
-        assert other is not None and other is not True and other is not False
-        tl = other.doc.timeline
-        assert other.doc.skeleton.name == "walk_zxy" and tl.clip is not None and tl.n_frames == 4
-    finally:
-        other.doc.history.set_clean()
-        other.close()
+def test_import_a_clip_of_another_skeleton_plays_in_this_window_on_its_own_document(qtbot, window, monkeypatch):
+    _dialog_returns(monkeypatch, os.path.join(DATA, "walk_zxy.bvh"))
+    window.act_import_clip.trigger()  # File -> Import BVH clip... (the document is clean: no question)
+    doc = window.doc
+    tl = doc.timeline
+    assert doc.skeleton.name == "walk_zxy" and tl.clip is not None and tl.n_frames == 4 and not window.others
+    assert _shows_skeleton(window, doc.skeleton)
+    qtbot.waitUntil(lambda: not tl.playing, timeout=20000)
+    assert tl.frame == tl.n_frames - 1
 
 
 @pytest.mark.parametrize("kind", ["clip", "skeleton"])
