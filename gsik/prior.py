@@ -180,10 +180,12 @@ def read_npz(path: str | os.PathLike, what: str, format: int, needed: tuple[str,
         raise GsikFileError(f"cannot read {what} {path}: {e.strerror or e}") from None
     except ValueError as e:
         raise PriorError(f"{path}: not a {what} file: {e}") from None
+    if "format" in data and int(data["format"]) != format:
+        raise PriorError(f"{path}: not a format-{format} {what} (format {int(data['format'])}; formats: "
+                         f"{FORMAT} a Gaussian pose prior, 2 a pose mixture)")
     missing = [k for k in ("format",) + needed if k not in data]
-    if missing or int(data["format"]) != format:
-        found = f"missing {choices(missing)}" if missing else f"format {int(data['format'])}"
-        raise PriorError(f"{path}: not a format-{format} {what} ({found})")
+    if missing:
+        raise PriorError(f"{path}: not a format-{format} {what} (missing {choices(missing)})")
     return data
 
 
