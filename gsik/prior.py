@@ -136,15 +136,21 @@ def fit_prior(Q: np.ndarray, skeleton: Skeleton, shrinkage: float | None = None,
 
     ``shrinkage`` in [0, 1]; default chosen by :func:`choose_shrinkage`.
     """
+    Q, a = training_poses(Q, skeleton, shrinkage, "a pose prior")
+    return PosePrior(skeleton.name, tuple(skeleton.dof_names), Q.mean(axis=0), regularised(np.cov(Q.T), a),
+                     len(Q), a, source)
+
+
+def training_poses(Q, skeleton: Skeleton, shrinkage: float | None, what: str) -> tuple[np.ndarray, float]:
+    """Poses ``Q`` checked to be (n_frames >= 2 * CV_SEGMENTS, n_dofs) floats, and the shrinkage: ``shrinkage``
+    checked to be in [0, 1], or chosen by :func:`choose_shrinkage` when ``None``; ``what`` names the prior in errors."""
     Q = np.asarray(Q, dtype=float)
     if Q.ndim != 2 or Q.shape[1] != skeleton.n_dofs or len(Q) < 2 * CV_SEGMENTS:
-        raise PriorError(f"a pose prior needs poses (n_frames >= {2 * CV_SEGMENTS}, {skeleton.n_dofs}), "
-                         f"got {Q.shape}")
+        raise PriorError(f"{what} needs poses (n_frames >= {2 * CV_SEGMENTS}, {skeleton.n_dofs}), got {Q.shape}")
     a = choose_shrinkage(Q) if shrinkage is None else float(shrinkage)
     if not 0.0 <= a <= 1.0:
         raise PriorError(f"shrinkage must be in [0, 1], got {shrinkage!r}")
-    return PosePrior(skeleton.name, tuple(skeleton.dof_names), Q.mean(axis=0), regularised(np.cov(Q.T), a),
-                     len(Q), a, source)
+    return Q, a
 
 
 def write_prior(prior: PosePrior, path: str | os.PathLike) -> None:

@@ -29,7 +29,7 @@ from functools import cached_property
 import numpy as np
 
 from gsik.errors import PriorError
-from gsik.prior import CV_SEGMENTS, PosePrior, choose_shrinkage, read_npz, regularised, segments, use_prior, \
+from gsik.prior import CV_SEGMENTS, PosePrior, read_npz, regularised, segments, training_poses, use_prior, \
     write_npz
 
 #: Component counts tried when ``K`` is chosen by cross-validation.
@@ -201,16 +201,10 @@ def fit_mixture(Q: np.ndarray, skeleton, components: int | None = None, shrinkag
     ``components`` >= 1 (default: chosen by :func:`choose_components`);
     ``shrinkage`` in [0, 1] (default: the single Gaussian's, :func:`gsik.prior.choose_shrinkage`).
     """
-    Q = np.asarray(Q, dtype=float)
-    if Q.ndim != 2 or Q.shape[1] != skeleton.n_dofs or len(Q) < 2 * CV_SEGMENTS:
-        raise PriorError(f"a pose mixture needs poses (n_frames >= {2 * CV_SEGMENTS}, {skeleton.n_dofs}), "
-                         f"got {Q.shape}")
+    Q, a = training_poses(Q, skeleton, shrinkage, "a pose mixture")
     if components is not None and not (isinstance(components, int) and 1 <= components <= len(Q) // 2):
         raise PriorError(f"components must be an integer in [1, {len(Q) // 2}] (or None: chosen by "
                          f"cross-validation from {list(COMPONENT_GRID)}), got {components!r}")
-    a = choose_shrinkage(Q) if shrinkage is None else float(shrinkage)
-    if not 0.0 <= a <= 1.0:
-        raise PriorError(f"shrinkage must be in [0, 1], got {shrinkage!r}")
     k = choose_components(Q, a)[0] if components is None else components
     w, m, c = em(Q, k, a)
     return PoseMixture(skeleton.name, tuple(skeleton.dof_names), w, m, c, len(Q), a, source)
