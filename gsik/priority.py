@@ -15,8 +15,10 @@ hierarchy stays strict and the limits are never crossed.
 A preferred posture is the lowest level: minimise ``(q + dq - mu)^T P (q + dq - mu)``
 (:func:`posture_level`), with ``P`` a full (n, n) precision matrix or per-DOF weights.
 
-NumPy only: the systems are small (tens of DOFs), so an SVD per level costs
-tens of microseconds.
+:func:`prioritized_step` runs compiled (:mod:`gsik.kernels.priority`: a pivoted
+QR per level, a few microseconds); :func:`prioritized_step_svd` is the same step
+in NumPy with an SVD per level (hundreds of microseconds), the reference the
+tests and benchmarks check the kernel against.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
+
+from gsik.kernels import priority as kernel
 
 #: Singular values below this fraction of a level's largest are treated as zero: those
 #: directions stay free for the lower levels.
@@ -75,6 +79,36 @@ def factor_level(q: np.ndarray, reference: np.ndarray, factor: np.ndarray) -> Le
     return Level(factor, factor @ g, np.ones(factor.shape[0]))
 
 
+class PackedLevels(NamedTuple):
+    """Levels as the kernel reads them: every level's rows one below the other.
+
+    Attributes:
+        rows: (M, n_dofs) the Jacobian rows. errors, weights: (M,).
+        starts: (L + 1,) int64: level ``l`` is rows ``starts[l]:starts[l + 1]``.
+    """
+
+    rows: np.ndarray
+    errors: np.ndarray
+    weights: np.ndarray
+    starts: np.ndarray
+
+
+def pack_levels(levels: Sequence[Level], n_dofs: int) -> PackedLevels:
+    """The :class:`PackedLevels` of ``levels`` (fresh C-ordered float64 arrays)."""
+    starts = np.zeros(len(levels) + 1, dtype=np.int64)
+    end = 0
+    for i, level in enumerate(levels):
+        end += len(level.error)
+        starts[i + 1] = end
+    rows, errors, weights = np.empty((end, n_dofs)), np.empty(end), np.empty(end)
+    for i, level in enumerate(levels):  # slice by slice: cheaper than concatenating, for a handful of levels
+        a, b = starts[i], starts[i + 1]
+        rows[a:b] = level.jacobian
+        errors[a:b] = level.error
+        weights[a:b] = level.weights
+    return PackedLevels(rows, errors, weights, starts)
+
+
 def prioritized_step(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray,
                      damping: float | Sequence[float]) -> np.ndarray:
     """The step ``dq`` (n,) [rad] solving ``levels`` in strict priority order within ``lo <= dq <= hi``.
@@ -83,7 +117,26 @@ def prioritized_step(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray,
     restricted to the directions the higher levels leave free and the DOFs not
     locked at a bound. ``lo <= 0 <= hi`` (n,) is required. ``damping`` is one
     value for every level or one per level.
+
+    Raises:
+        numpy.linalg.LinAlgError: if a level's weighted Jacobian, seen in the directions left to it,
+            holds a non-finite number.
     """
+    lo = np.array(lo, dtype=float)
+    hi = np.array(hi, dtype=float)
+    dampings = np.array(damping, dtype=float)
+    if dampings.shape != (len(levels),):
+        dampings = np.array(np.broadcast_to(dampings, (len(levels),)))
+    packed = pack_levels(levels, lo.shape[0])
+    dq = np.empty(lo.shape[0])
+    if kernel.prioritized_step(*packed, dampings, lo, hi, RANK_TOLERANCE, dq) != kernel.OK:
+        raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
+    return dq
+
+
+def prioritized_step_svd(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray,
+                         damping: float | Sequence[float]) -> np.ndarray:
+    """:func:`prioritized_step` in NumPy, an SVD per level: the reference the kernel is checked against."""
     lo = np.asarray(lo, dtype=float)
     hi = np.asarray(hi, dtype=float)
     n = lo.shape[0]

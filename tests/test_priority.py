@@ -1,10 +1,12 @@
-"""The strict-priority step: limits kept, higher levels untouched by lower ones, posture as the last level."""
+"""The strict-priority step: limits kept, higher levels untouched by lower ones, posture as the last level; the
+compiled step equal to the NumPy SVD reference."""
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gsik.priority import Level, posture_level, prioritized_step
+from gsik.priority import Level, pack_levels, posture_level, prioritized_step, prioritized_step_svd
 
 
 def _levels(rng, n, sizes):
@@ -92,3 +94,76 @@ def test_zero_posture_weights_leave_the_step_alone(rng):
     lo, hi = np.full(n, -1.0), np.full(n, 1.0)
     with_posture = prioritized_step([task, posture_level(np.zeros(n), np.ones(n), np.zeros(n))], lo, hi, 1e-3)
     np.testing.assert_allclose(with_posture, prioritized_step([task], lo, hi, 1e-3), atol=1e-12)
+
+
+# -- the compiled step against the NumPy SVD reference -----------------------------------------------------------
+@st.composite
+def hard_problems(draw):
+    """``(levels, lo, hi, damping)``: up to 30 DOFs and 4 levels, some empty, some with a duplicated or a zero row
+    (rank-deficient), boxes from roomy to so tight that most steps lock DOFs. Rows are random otherwise, so what a
+    level sees of its rows beyond the higher levels' is well conditioned."""
+    n = draw(st.integers(1, 30))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    levels = []
+    for m in draw(st.lists(st.integers(0, 8), min_size=1, max_size=4)):
+        J = rng.normal(size=(m, n))
+        if m >= 2 and draw(st.booleans()):
+            J[-1] = J[0]
+        if m >= 1 and draw(st.booleans()):
+            J[rng.integers(m)] = 0.0
+        levels.append(Level(J, rng.normal(size=m), rng.uniform(0.1, 2.0, size=m)))
+    width = draw(st.sampled_from([0.01, 0.3, 3.0]))
+    lo, hi = _box(rng, n, width)
+    return levels, lo, hi, draw(st.sampled_from([1e-3, 1e-6]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(hard_problems())
+def test_compiled_step_equals_the_svd_reference(problem):
+    levels, lo, hi, damping = problem
+    np.testing.assert_allclose(prioritized_step(levels, lo, hi, damping),
+                               prioritized_step_svd(levels, lo, hi, damping), rtol=0.0, atol=1e-8)
+
+
+@settings(max_examples=200, deadline=None)
+@given(hard_problems())
+def test_compiled_step_stays_in_the_box_and_keeps_every_higher_level(problem):
+    levels, lo, hi, damping = problem
+    alone = [prioritized_step(levels[: k + 1], lo, hi, damping) for k in range(len(levels))]
+    for k, dq in enumerate(alone):
+        assert np.all(dq >= lo) and np.all(dq <= hi)
+        for j in range(k):
+            np.testing.assert_allclose(levels[j].jacobian @ dq, levels[j].jacobian @ alone[j], rtol=0.0, atol=1e-9)
+
+
+def test_per_level_damping_matches_the_reference(rng):
+    levels, (lo, hi) = _levels(rng, 9, [3, 2, 4]), _box(rng, 9, 0.5)
+    dampings = [1e-2, 1e-4, 1e-3]
+    np.testing.assert_allclose(prioritized_step(levels, lo, hi, dampings),
+                               prioritized_step_svd(levels, lo, hi, dampings), atol=1e-12)
+
+
+def test_no_levels_or_only_empty_ones_give_no_step():
+    lo, hi = -np.ones(4), np.ones(4)
+    empty = Level(np.zeros((0, 4)), np.zeros(0), np.zeros(0))
+    np.testing.assert_array_equal(prioritized_step([], lo, hi, 1e-3), np.zeros(4))
+    np.testing.assert_array_equal(prioritized_step([empty, empty], lo, hi, 1e-3), np.zeros(4))
+
+
+def test_a_non_finite_jacobian_raises_as_the_svd_does(rng):
+    J = rng.normal(size=(3, 5))
+    J[1, 2] = np.nan
+    level = Level(J, np.ones(3), np.ones(3))
+    with pytest.raises(np.linalg.LinAlgError):
+        prioritized_step_svd([level], -np.ones(5), np.ones(5), 1e-3)
+    with pytest.raises(np.linalg.LinAlgError, match="non-finite"):
+        prioritized_step([level], -np.ones(5), np.ones(5), 1e-3)
+
+
+def test_packed_levels_keep_each_level_s_rows_in_order(rng):
+    levels = _levels(rng, 4, [2, 0, 3])
+    packed = pack_levels(levels, 4)
+    np.testing.assert_array_equal(packed.starts, [0, 2, 2, 5])
+    np.testing.assert_array_equal(packed.rows, np.vstack([level.jacobian for level in levels]))
+    np.testing.assert_array_equal(packed.errors, np.concatenate([level.error for level in levels]))
+    np.testing.assert_array_equal(packed.weights, np.concatenate([level.weights for level in levels]))
