@@ -17,6 +17,16 @@ Printed (Markdown, one run, medians of timings):
 3. Balance. Balanced on the right foot, the left hand's target pulled 0.8 m
    forward at priority 1, 300 frames of ``step()``, balance on and off: the
    centre of mass's greatest distance outside the right sole (negative: inside).
+4. Step time, as the studio steps: its default targets (feet and pelvis pinned
+   at priority 0, head and hands free at 1, hands position-only) with the left
+   hand dragged round a 25 cm circle, one target move and one ``Solver.step()``
+   a frame, then held still. Median ``Solver.step()`` time while dragging and
+   while held, for today's single level (every target at priority 0: the fast
+   kernel), the studio's pins, the pins with a rest posture (weight 1), and the
+   pins with the learned prior (:func:`gsik.prior.use_prior`, strength 1). The
+   solvers take turns frame by frame, so a change of machine load touches all alike.
+   ``--before REV`` adds the prioritised paths again with ``gsik/control.py`` as
+   it was at git revision REV (the rest of the package as it is now).
 
 Run: ``python benchmarks/bench_control.py [--poses 50]``. Nothing here is asserted by the tests.
 """
@@ -24,15 +34,22 @@ Run: ``python benchmarks/bench_control.py [--poses 50]``. Nothing here is assert
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
+import gsik.solver
 from gsik import Solver, Target, load_skeleton
 from gsik.balance import signed_distance, support_polygon
 from gsik.benchmark import HELD_AT_LEVEL_0 as LEVEL_0
 from gsik.benchmark import hand_pull_targets as _pull_targets
+from gsik.prior import bundled_prior, use_prior
 
 
 def priorities(frames: int = 400) -> None:
@@ -118,14 +135,101 @@ def balance(frames: int = 300) -> None:
     print()
 
 
+def _studio_targets(solver: Solver, hand_offset) -> dict[str, Target]:
+    """The studio's default targets where the biped stands, the left hand's moved by ``hand_offset`` (3,) [m]."""
+    targets = {}
+    for name, pose in solver.effector_poses().items():
+        if name != solver.root:
+            free = name not in ("left_foot", "right_foot", "pelvis")
+            targets[name] = Target.from_transform(pose, position_only=name.endswith("_hand"), priority=int(free))
+    targets["left_hand"] = targets["left_hand"].replace(position=targets["left_hand"].position + hand_offset)
+    return targets
+
+
+def _control_at(rev: str):
+    """``gsik/control.py`` as it was at git revision ``rev``, loaded as a module beside today's."""
+    root = Path(__file__).resolve().parents[1]
+    text = subprocess.run(["git", "-C", str(root), "show", f"{rev}:gsik/control.py"], check=True,
+                          capture_output=True, text=True).stdout
+    path = Path(tempfile.mkdtemp()) / "control_before.py"
+    path.write_text(text)
+    spec = importlib.util.spec_from_file_location("gsik_control_before", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def _step_solvers(sk, before: str | None) -> dict[str, tuple[Solver, object]]:
+    """``{label: (solver, the gsik.control module it steps with)}``."""
+    paths = {"single level (today)": None, "studio pins": None, "pins + rest posture": 1.0,
+             "pins + learned prior": "prior"}
+    controls = [("", gsik.solver.control)] + ([(f" [{before}]", _control_at(before))] if before else [])
+    out = {}
+    for suffix, module in controls:
+        for label, posture in paths.items():
+            if suffix and label.startswith("single"):
+                continue
+            solver = Solver(sk, sweeps=8)
+            if posture == "prior":
+                use_prior(solver, bundled_prior("biped"), 1.0)
+            elif posture is not None:
+                solver.set_posture(None, posture)
+            out[label + suffix] = (solver, module)
+    return out
+
+
+def step_times(frames: int = 300, held: int = 100, before: str | None = None) -> None:
+    sk = load_skeleton("biped")
+    solvers = _step_solvers(sk, before)
+    rest = {label: _studio_targets(s, np.zeros(3)) for label, (s, _) in solvers.items()}
+    rest["single level (today)"] = {n: t.replace(priority=0) for n, t in rest["single level (today)"].items()}
+    per = {label: ([], []) for label in solvers}
+    for i in range(-10, frames + held):  # ten warm-up frames (compiling, building), then timed
+        a = 2.0 * np.pi * min(max(i, 0), frames) / 100.0
+        offset = np.array([0.25 * np.sin(a), 0.15, 0.25 * (np.cos(a) - 1.0)])
+        for label, (solver, module) in solvers.items():
+            gsik.solver.control = module
+            hand = rest[label]["left_hand"]
+            solver.set_targets({**rest[label], "left_hand": hand.replace(position=hand.position + offset)})
+            t = time.perf_counter_ns()
+            solver.step()
+            if i >= 0:
+                per[label][i >= frames].append(time.perf_counter_ns() - t)
+    print(f"### Step time: the studio's targets, the left hand dragged round a 25 cm circle ({frames} frames), "
+          f"then held ({held} frames); Solver.step(), median\n")
+    print("| path | dragging | vs single level | held | status at the end |")
+    print("|---|---|---|---|---|")
+    base = float(np.median(per["single level (today)"][0]))
+    medians = {}
+    for label, (solver, module) in solvers.items():
+        gsik.solver.control = module
+        drag, still = (float(np.median(x)) for x in per[label])
+        medians[label] = drag
+        print(f"| {label} | {drag / 1e3:.0f} µs | {drag / base:.1f}x | {still / 1e3:.0f} µs "
+              f"| {solver.step().status.name.lower()} |")
+    gsik.solver.control = solvers["single level (today)"][1]
+    ratio = medians["pins + learned prior"] / medians["pins + rest posture"]
+    print(f"\nLearned prior / rest posture while dragging: {ratio:.2f}x (issue 12 asks <= 1.5x).\n")
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--poses", type=int, default=50, help="random poses for the posture test (default 50)")
+    parser.add_argument("--only-step-time", action="store_true", help="run part 4 (step time) only")
+    parser.add_argument("--before", metavar="REV", help="part 4 also with gsik/control.py as at git revision REV")
     args = parser.parse_args(argv)
-    print(f"Load average at start: {os.getloadavg()[0]:.2f} ({os.cpu_count()} CPUs)\n")
-    priorities()
-    posture(args.poses)
-    balance()
+    print(f"Load average at start: {_load()} ({os.cpu_count()} CPUs)\n")
+    if not args.only_step_time:
+        priorities()
+        posture(args.poses)
+        balance()
+    step_times(before=args.before)
+    print(f"Load average at the end: {_load()}")
+
+
+def _load() -> str:
+    return " / ".join(f"{x:.2f}" for x in os.getloadavg()) + " (1 / 5 / 15 min)"
 
 
 if __name__ == "__main__":

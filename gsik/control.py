@@ -10,11 +10,15 @@ angles and solves the levels in strict order (:func:`gsik.priority.prioritized_s
 3. the targets of priority 1, 2, ... in turn,
 4. the preferred posture (when on).
 
-A step is kept only if it leaves every level no worse, in order: the first
-level it changes by more than ``settle_tolerance`` must improve (a level
-within its tolerances before and after counts as unchanged). Otherwise it is
-halved, then refused and the damping raised (Levenberg-Marquardt, as the fast
-path does), so a held target settles at its best reach instead of jittering.
+A step is kept only if it leaves every level no worse, in order
+(:func:`gsik.acceptance.compare`). Otherwise it is halved, then refused and
+the damping raised (Levenberg-Marquardt, as the fast path does). A level
+within its tolerances takes full Gauss-Newton steps (the base damping): it is
+a constraint to stay on, and a damping raised for a lower level must not stop
+it closing in. A step that changes nothing, or is refused at the largest
+damping, holds the pose (as a refused step of the fast path does), and holding
+is remembered, so a held target settles at its best reach instead of
+jittering, and a held step costs nothing.
 """
 
 from __future__ import annotations
@@ -23,16 +27,22 @@ from typing import NamedTuple
 
 import numpy as np
 
+from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
 from gsik.kernels import kinematics as kernels
 from gsik.kernels.step import ADAPTIVE_FLOOR
 from gsik.errors import SolverError
 from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
     support_polygon
 from gsik.kinematics import kinematic_model, topology
-from gsik.priority import Level, factor_level, posture_factor, prioritized_step
+from gsik.priority import Level, posture_factor, prioritized_step
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
+#: Largest adaptive damping (the fast path's too): a step refused at it holds the pose.
+MAX_DAMPING = 1e6
+#: A met level's tightening counts only if it lowers the level's cost by more than errors of this fraction of
+#: the tolerances would cost: pins close in to far under their tolerance, then hold.
+TIGHTEN_FRACTION = 0.01
 #: Balance sits between the targets of priority 0 and those of priority 1 (arms pulled at 1 cannot tip the body).
 BALANCE_PRIORITY = 0.5
 #: The centre of mass is held this far [m] inside the support polygon's edge ...
@@ -89,7 +99,8 @@ class ControlStats(NamedTuple):
 
     Attributes:
         accepted: The step was kept.
-        held: No level would change by more than the settle tolerance: the pose is at rest.
+        held: The pose is at rest: no level would change by more than the settle tolerance, or even the
+            largest damping's step is refused (the studio's frame loop may idle).
         converged: Every target is within the position and orientation tolerances.
         cost: Weighted squared error ``0.5 e^T W e`` of the targets, all levels.
         step_norm: Size of the change of ``q`` [rad].
@@ -121,9 +132,11 @@ class Controller:
         self._posture = posture
         # The posture's precision factored once (a learned prior's is a full matrix): each step only multiplies.
         self._posture_factor = None if posture is None else posture_factor(posture.precision)
+        self._posture_ones = np.ones(skeleton.n_dofs)
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
-        self._state_cache = None  # (q, world_from_root, level state) of the last accepted pose
+        self._state_cache = None  # (q, world_from_root, LevelState) of the last accepted pose
+        self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
         self._layout = None  # (effector names, result names, task index of each) for results
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
@@ -132,7 +145,6 @@ class Controller:
         self._topo = topology(skeleton, skeleton.root, names)
         self._task_model = _kinematics(skeleton, self._topo)
         self._fk_model = _kinematics(skeleton)
-        self.retarget(tasks)
         priorities = [t.priority for t in self._tasks]
         if balance is not None:
             priorities.append(BALANCE_PRIORITY)
@@ -144,19 +156,54 @@ class Controller:
         self._J = np.zeros((6 * m, skeleton.n_dofs))
         self._e = np.zeros(6 * m)
         self._err = np.zeros((2, m))
+        self._row_w = None  # (m, 6) set with what depends on it by retarget
         self._M = np.zeros((3, 3))
         if balance is not None:
             bodies = [skeleton.frame_names[f] for f in balance.mass.body_frame]
             self._mass_kinematics = _kinematics(skeleton, topology(skeleton, skeleton.root, bodies))
             self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
+        self.retarget(tasks)
 
     def retarget(self, tasks) -> None:
         """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
         ordered = _ordered(tasks)
-        self._tp = np.array([t.position for t in ordered]).reshape(-1, 3)
-        self._tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
-        self._row_w = np.array([t.row_weight for t in ordered]).reshape(-1, 6)
-        self._state_cache = None
+        tp = np.array([t.position for t in ordered]).reshape(-1, 3)
+        tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
+        row_w = np.array([t.row_weight for t in ordered]).reshape(-1, 6)
+        if self._row_w is not None and np.array_equal(tp, self._tp) and np.array_equal(tR, self._tR) \
+                and np.array_equal(row_w, self._row_w):
+            return  # the same targets again (a held drag): what the last steps learnt still holds
+        self._tp, self._tR = tp, tR
+        if not np.array_equal(row_w, self._row_w):
+            self._row_w = row_w
+            self._thresholds()
+        self._state_cache = self._held = None
+
+    def _thresholds(self) -> None:
+        """What depends on the row weights only: each level's rows, the error bounds (2, m) of the band and of
+        convergence (inf where a row is unused), and per level (L + 1,) the cost of errors at
+        :data:`TIGHTEN_FRACTION` of the tolerances (``_floors``) and at the tolerances (``_near``)."""
+        s, w = self._settings, self._row_w
+        used = np.stack([w[:, 0] > 0.0, w[:, 3] > 0.0])
+        tolerance = np.array([[s.position_tolerance], [s.orientation_tolerance]])
+        self._tolerance = np.where(used, tolerance, np.inf)
+        self._band = 0.5 * self._tolerance
+        L, m = len(self._levels), len(self._tasks)
+        rows = np.repeat(self._task_level, 6)
+        self._level_rows = [np.flatnonzero((rows == k) & (w.reshape(-1) > 0.0)) for k in range(L)]
+        self._level_weights = [w.reshape(-1)[r] for r in self._level_rows]
+        # Sums per level as one product each: 0.5 w over each level's error rows, and its tasks' two error columns.
+        self._cost_rows = np.zeros((L + 1, 6 * m))
+        self._cost_rows[rows, np.arange(6 * m)] = 0.5 * w.reshape(-1)
+        self._band_rows = np.zeros((L + 1, 2 * m))
+        self._band_rows[np.tile(self._task_level, 2), np.arange(2 * m)] = 1.0
+        per_task = 0.5 * TIGHTEN_FRACTION ** 2 * (w[:, 0] * s.position_tolerance ** 2
+                                                  + w[:, 3] * s.orientation_tolerance ** 2)
+        floors = np.bincount(self._task_level, per_task, minlength=len(self._levels) + 1)
+        if self._balance is not None:
+            floors[self._balance_level] = 0.5 * (TIGHTEN_FRACTION * BALANCE_TOLERANCE) ** 2
+        self._floors = floors
+        self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
 
     # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -175,35 +222,29 @@ class Controller:
             where = {n: k for k, n in enumerate(self.names)}
             self._layout = (effector_names, names, np.array([where.get(n, -1) for n in names], dtype=np.int64))
         _, names, index = self._layout
-        pos, ori = self.errors(R, p)
-        out = np.zeros((2, len(names)))
-        has = index >= 0
-        out[0, has] = pos[index[has]]
-        out[1, has] = ori[index[has]]
+        self._task_errors(R, p)
+        padded = np.zeros((2, len(self.names) + 1))  # a last column of zeros for the effectors without a target
+        padded[:, :-1] = np.where(self._tolerance < np.inf, self._err, 0.0)
+        out = padded[:, index]
         return names, out[0], out[1]
 
     def _task_errors(self, R, p) -> None:
         kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
                                 self._M)
 
-    def _level_state(self, q, R, p) -> tuple[np.ndarray, np.ndarray]:
-        """Cost ``0.5 e^T W e`` per level (in order, the posture's last) and whether each level is met.
+    def _level_state(self, q, R, p) -> LevelState:
+        """The levels at ``q`` (frames ``R``, ``p``), anchored at their own costs (:class:`~gsik.acceptance.LevelState`).
 
         A target level is met when all its targets are within half the
         tolerances, balance when the centre of mass is inside the support
         polygon's margin (within :data:`BALANCE_TOLERANCE`); the posture never is (it always compares by cost).
         """
-        s = self._settings
         self._task_errors(R, p)
-        L = len(self._levels)
-        costs = np.zeros(L + 1)
-        weighted = 0.5 * (self._row_w * self._e.reshape(-1, 6) ** 2).sum(axis=1)
-        np.add.at(costs, self._task_level, weighted)
-        missed = ((self._row_w[:, 0] > 0.0) & (self._err[0] > 0.5 * s.position_tolerance)) | \
-                 ((self._row_w[:, 3] > 0.0) & (self._err[1] > 0.5 * s.orientation_tolerance))
-        met = np.ones(L + 1, dtype=bool)
-        met[self._task_level[missed]] = False
-        met[L] = False
+        e, err = self._e.copy(), self._err
+        costs = self._cost_rows @ (e * e)
+        target_cost = float(costs.sum())
+        met = self._band_rows @ (err > self._band).ravel() == 0.0
+        met[-1] = False
         if self._balance is not None:
             goal, com = self._support_goal(R, p)
             outside = max(signed_distance(goal, com[:2]), 0.0)
@@ -212,13 +253,14 @@ class Controller:
         if self._posture is not None:
             g = q - self._posture.reference
             P = self._posture.precision
-            costs[L] = 0.5 * float(g @ (P * g if P.ndim == 1 else P @ g))
-        return costs, met
+            costs[-1] = 0.5 * float(g @ (P * g if P.ndim == 1 else P @ g))
+        converged = not (err > self._tolerance).any()
+        return LevelState(costs, met, costs, converged, target_cost, e)
 
     def rank(self, q, R, p) -> tuple:
         """The levels' costs in priority order (a met level counts 0): compare poses lexicographically."""
-        costs, met = self._level_state(q, R, p)
-        return tuple(np.where(met, 0.0, costs).tolist())
+        state = self._level_state(q, R, p)
+        return tuple(np.where(state.met, 0.0, state.costs).tolist())
 
     def _support_goal(self, R, p) -> tuple[np.ndarray, np.ndarray]:
         """The polygon the centre of mass must stay in (support shrunk by the margin) and the centre of mass."""
@@ -228,21 +270,18 @@ class Controller:
         return goal, center_of_mass(b.mass, R, p)
 
     # -- the linearised levels -------------------------------------------------
-    def levels(self, q, R, p) -> list[Level]:
-        """The linearised levels at ``q`` (frames ``R``, ``p``), in priority order, the posture last."""
-        self._task_errors(R, p)
+    def levels(self, q, R, p, error: np.ndarray | None = None) -> list[Level]:
+        """The linearised levels at ``q`` (frames ``R``, ``p``), in priority order, the posture last;
+        ``error`` (6 m,) the targets' errors there if known (:attr:`LevelState.error`)."""
+        if error is None:
+            self._task_errors(R, p)
+            error = self._e
         _jacobian(self._task_model, R, p, self._J)
-        rows = np.repeat(self._task_level, 6)
-        weights = self._row_w.reshape(-1)
-        out = []
-        for k in range(len(self._levels)):
-            if k == self._balance_level:
-                out.append(self._balance_level_rows(R, p))
-                continue
-            sel = (rows == k) & (weights > 0.0)
-            out.append(Level(self._J[sel], self._e[sel], weights[sel]))
+        out = [self._balance_level_rows(R, p) if k == self._balance_level else Level(self._J[rows], error[rows], w)
+               for k, (rows, w) in enumerate(zip(self._level_rows, self._level_weights))]
         if self._posture is not None:
-            out.append(factor_level(q, self._posture.reference, self._posture_factor))
+            L = self._posture_factor  # factor_level's level, with its arrays made once
+            out.append(Level(L, L @ (self._posture.reference - q), self._posture_ones))
         return out
 
     def _balance_level_rows(self, R, p) -> Level:
@@ -261,48 +300,77 @@ class Controller:
         ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
         """
         s = self._settings
+        damping = lam[0] if s.adaptive_damping else s.damping
+        if self._holds(q, W, damping):
+            return self._held[3]  # the same step from the same pose: it would hold again
         cached = self._state_cache
         fresh = cached is not None and np.array_equal(cached[0], q) and np.array_equal(cached[1], W)
-        state0 = cached[2] if fresh else self._level_state(q, R, p)
-        damping = lam[0] if s.adaptive_damping else s.damping
-        tries, (verdict, q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
-        accepted = verdict == "better" or not s.adaptive_damping
+        state0 = cached[2] if fresh else anchored(self._level_state(q, R, p))
+        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
+        accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
             step_norm = float(np.linalg.norm(q2 - q))
             q[:], R[:], p[:] = q2, R2, p2
+            state = anchored(state, state0, decided if verdict == BETTER else 0)
             self._state_cache = (q.copy(), W.copy(), state)
         else:
-            step_norm = 0.0
+            step_norm, state = 0.0, state0
         self._adapt_damping(lam, damping, verdict, accepted, tries)
-        held = s.adaptive_damping and (verdict == "same" or (accepted and step_norm <= s.stall_tolerance))
-        converged, cost = self._summary(R, p)
-        return ControlStats(accepted, held, converged, cost, step_norm)
+        # Held: nothing would change, or even the largest damping's step is refused (the fast path's stall).
+        held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
+                                       or (not accepted and damping >= MAX_DAMPING))
+        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm)
+        self._held = (q.copy(), W.copy(), lam[0], stats) if held and not accepted else None
+        return stats
 
-    def _damped_trial(self, q, W, R, p, state0, damping) -> tuple[int, tuple]:
+    def _holds(self, q, W, damping) -> bool:
+        """True if the last step held the pose ``q`` at ``W`` with this damping: a step now would do the same."""
+        held = self._held
+        return held is not None and held[2] == damping and np.array_equal(held[0], q) and np.array_equal(held[1], W)
+
+    def _damped_trial(self, q, W, R, p, state0: LevelState, damping) -> tuple[int, tuple]:
         """``(halvings made, trial)``: the prioritised step from ``q``, halved up to 3 times while its
-        trial (:meth:`_trial`) is worse (with adaptive damping only)."""
-        dq = prioritized_step(self.levels(q, R, p), *self._box(q, q), self._dampings(damping))
+        trial (:meth:`_trial`) is worse (with adaptive damping only); if it stays worse, the met levels'
+        correction alone (:meth:`_correction`)."""
+        dampings = self._dampings(damping, state0.costs)
+        levels = self.levels(q, R, p, state0.error)
+        box = self._box(q, q)
+        dq = prioritized_step(levels, *box, dampings)
         for tries in range(4):
-            trial = self._trial(q, q + dq, W, state0, damping)
-            if trial[0] != "worse" or not self._settings.adaptive_damping:
-                break
+            trial = self._trial(q, q + dq, W, state0, dampings)
+            if trial[0][0] != WORSE or not self._settings.adaptive_damping:
+                return tries, trial
             dq = 0.5 * dq
-        return tries, trial
+        return tries, self._correction(q, W, levels, box, state0, dampings) or trial
+
+    def _correction(self, q, W, levels, box, state0: LevelState, dampings) -> tuple | None:
+        """The trial of the step of the met levels above the first unmet one alone, if it tightens them (a lower
+        level may lose what their correction costs it: strict priority), else ``None``. A lower level's move
+        leaves them off by its second order; when that move is refused, this still closes them in."""
+        k = int(np.argmin(state0.met))  # the leading met levels (the posture, last, never is)
+        if k == 0 or k == len(self._levels) or not np.any(state0.costs[:k] > self._floors[:k]):
+            return None
+        dq = prioritized_step(levels[:k], *box, dampings[:k])
+        trial = self._trial(q, q + dq, W, state0, dampings, upto=k)
+        return trial if trial[0][0] == BETTER else None
 
     def _adapt_damping(self, lam: np.ndarray, damping: float, verdict: str, accepted: bool, tries: int) -> None:
         """Levenberg-Marquardt on ``lam`` (1,): lower it after a full step taken, raise it after a worse one."""
         s = self._settings
         if accepted and s.adaptive_damping:
             lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
-        elif not accepted and verdict == "worse":
-            lam[0] = min(damping * 10.0, 1e6)
+        elif not accepted and verdict == WORSE:
+            lam[0] = min(damping * 10.0, MAX_DAMPING)
 
-    def _dampings(self, lam: float) -> np.ndarray:
-        """Damping per level: the adaptive one for the targets and balance, the fixed one for the
-        posture (its precision is well conditioned, and a raised damping would freeze it)."""
-        d = np.full(len(self._levels) + (self._posture is not None), lam)
+    def _dampings(self, lam: float, costs: np.ndarray) -> np.ndarray:
+        """Damping per level, given its ``costs`` (L + 1,): the base one for a level within its tolerances (its
+        linear model is good there: a small error is closed at once, whatever a lower level's trouble raised
+        ``lam`` to), ``lam`` for the others, and for the posture the base one raised as ``lam`` is (so a
+        posture move refused for its second-order cost shrinks)."""
+        base = self._settings.damping
+        d = np.where(costs[:-1] <= self._near, min(base, lam), lam)
         if self._posture is not None:
-            d[-1] = self._settings.damping
+            d = np.append(d, base * max(1.0, lam / base))
         return d
 
     def _box(self, q: np.ndarray, q_from: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -314,37 +382,29 @@ class Controller:
             hi = np.minimum(hi, q - q_from + s.max_step)
         return np.minimum(lo, 0.0), np.maximum(hi, 0.0)
 
-    def _trial(self, q, q_try, W, state0, damping):
-        """``(verdict, q, R, p, level state)`` of a trial pose. When a lower level's move breaks a met higher level
-        (the null space is only flat to first order), up to :data:`RESTORING_STEPS` restoring steps of the target levels
-        from the trial pose brings it back onto them, and that pose is judged instead."""
-        sk = self._sk
+    def _trial(self, q, q_try, W, state0: LevelState, dampings, upto: int | None = None):
+        """``((verdict, deciding level), q, R, p, level state)`` of a trial pose (:func:`~gsik.acceptance.compare`,
+        on the levels above ``upto`` only if given). When a lower level's move breaks a met higher level (the
+        null space is only flat to first order), up to :data:`RESTORING_STEPS` restoring steps of the target
+        levels from the trial pose bring it back onto them, and that pose is judged instead."""
+        sk, settle = self._sk, self._settings.settle_tolerance
         R2, p2 = np.empty((sk.n_frames, 3, 3)), np.empty((sk.n_frames, 3))
         q2 = np.clip(q_try, sk.lower, sk.upper)
         self._frames(q2, W, R2, p2)
         state = self._level_state(q2, R2, p2)
-        verdict = _compare(state0, state, self._settings.settle_tolerance)
-        if verdict != "worse" or self._posture is None:
+        verdict = compare(state0, state, settle, self._floors, upto)
+        if verdict[0] != WORSE or self._posture is None or upto is not None:
             return verdict, q2, R2, p2, state
         q3, R3, p3 = q2.copy(), R2.copy(), p2.copy()
         for _ in range(RESTORING_STEPS):
             levels = self.levels(q3, R3, p3)[:-1]
-            q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), damping), sk.lower, sk.upper)
+            q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), dampings[:-1]), sk.lower, sk.upper)
             self._frames(q3, W, R3, p3)
             state3 = self._level_state(q3, R3, p3)
-            restored = _compare(state0, state3, self._settings.settle_tolerance)
-            if restored != "worse":
+            restored = compare(state0, state3, settle, self._floors)
+            if restored[0] != WORSE:
                 return restored, q3, R3, p3, state3
         return verdict, q2, R2, p2, state
-
-    def _summary(self, R, p) -> tuple[bool, float]:
-        """``(converged, target cost)`` at frames ``R``, ``p``, from one error evaluation."""
-        s = self._settings
-        self._task_errors(R, p)
-        w = self._row_w
-        missed = ((w[:, 0] > 0.0) & (self._err[0] > s.position_tolerance)) | \
-                 ((w[:, 3] > 0.0) & (self._err[1] > s.orientation_tolerance))
-        return not bool(missed.any()), float(0.5 * (w * self._e.reshape(-1, 6) ** 2).sum())
 
     def target_cost(self, R, p) -> float:
         """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
@@ -416,19 +476,6 @@ def support(skeleton, targets, p: np.ndarray) -> Balance:
             or (n in targets and abs(targets[n].position[2] - ground) <= GROUND_TOLERANCE)]
     return Balance(skeleton.mass_model, tuple(skeleton.frame_of(n) for n in feet),
                    tuple(skeleton.soles[n] for n in feet))
-
-
-def _compare(before: tuple, after: tuple, settle: float) -> str:
-    """``"better"``, ``"worse"`` or ``"same"``: ``(costs, met)`` of the levels compared in order
-    (lexicographically); a level met before and after counts as unchanged."""
-    for c0, c1, met0, met1 in zip(before[0], after[0], before[1], after[1]):
-        if met0 and met1:
-            continue
-        if c1 > c0 * (1.0 + settle) + 1e-300:
-            return "worse"
-        if c1 < c0 * (1.0 - settle):
-            return "better"
-    return "same"
 
 
 def _transform(R, p) -> np.ndarray:

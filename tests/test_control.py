@@ -180,3 +180,84 @@ def test_jacobian_of_joint_frames_matches_finite_differences(biped, rng, root):
     h = 1e-6
     fd = np.column_stack([(positions(q + h * e) - positions(q - h * e)) / (2 * h) for e in np.eye(biped.n_dofs)])
     np.testing.assert_allclose(J.reshape(len(names), 6, -1)[:, :3].reshape(-1, biped.n_dofs), fd, atol=1e-8)
+
+
+# -- settling: a held pull comes to rest, pins stay on their targets ---------------------------------------
+STUDIO_PINNED = ("left_foot", "pelvis")  # the studio pins feet (the right one is the IK root) and pelvis
+
+
+def _studio_targets(solver, pinned=STUDIO_PINNED, pulled=None, offset=(0.0, 0.0, 0.0)):
+    """The studio's default targets where the biped stands: ``pinned`` at priority 0, the others (head, hands)
+    free at 1, hands position-only; ``pulled``'s target moved by ``offset`` [m]."""
+    targets = {}
+    for name, pose in solver.effector_poses().items():
+        if name != solver.root:
+            targets[name] = Target.from_transform(pose, position_only=name.endswith("_hand"),
+                                                  priority=0 if name in pinned else 1)
+    if pulled is not None:
+        targets[pulled] = targets[pulled].replace(position=targets[pulled].position + np.asarray(offset))
+    return targets
+
+
+def _hold(solver, targets, frames=400):
+    """``frames`` steps with ``targets`` held: (angles (frames, n), statuses, largest error [m] of each target)."""
+    solver.set_targets(targets)
+    history, statuses, worst = [], [], dict.fromkeys(targets, 0.0)
+    for _ in range(frames):
+        r = solver.step()
+        history.append(r.q)
+        statuses.append(r.status)
+        worst = {n: max(worst[n], r.errors()[n][0]) for n in targets}
+    return np.array(history), statuses, worst
+
+
+def _assert_held(history, statuses):
+    assert np.abs(np.diff(history[-101:], axis=0)).max() == 0.0  # nothing moves over the last 100 frames
+    assert statuses[-1] in (gsik.Status.STALLED, gsik.Status.CONVERGED)  # the step says so: the frame loop idles
+
+
+@pytest.mark.parametrize("hand, offset", [("right_hand", (-0.86, 0.58, 2.08)), ("left_hand", (-1.13, -0.65, 0.85)),
+                                          ("left_hand", (2.27, 0.24, -1.87))])
+def test_a_hand_held_out_of_reach_beside_a_free_head_settles_with_a_posture(biped, hand, offset):
+    solver = Solver(biped, sweeps=8)
+    solver.set_posture(None, 1.0)  # the studio's posture strength
+    history, statuses, worst = _hold(solver, _studio_targets(solver, pulled=hand, offset=offset))
+    _assert_held(history, statuses)
+    assert max(worst[n] for n in STUDIO_PINNED) < 1e-4
+
+
+@pytest.mark.parametrize("posture", [0.0, 1.0])
+def test_a_pinned_head_stays_on_its_target_and_settles_while_a_hand_pulls(biped, posture):
+    pinned = STUDIO_PINNED + ("head",)
+    for hand, offset in (("left_hand", (-1.13, -0.65, 0.85)), ("right_hand", (-0.86, 0.58, 2.08))):
+        solver = Solver(biped, sweeps=8)
+        solver.set_posture(None, posture)
+        history, statuses, worst = _hold(solver, _studio_targets(solver, pinned, hand, offset))
+        _assert_held(history, statuses)
+        assert max(worst[n] for n in pinned) < 1e-4, (hand, worst)
+
+
+def test_issue_8_hand_pull_holds_and_says_so(biped):
+    solver = Solver(biped)
+    history, statuses, worst = _hold(solver, _pull(solver, [-3.0, 0.0, 0.0], 1))
+    _assert_held(history, statuses)
+    assert max(worst[n] for n in LEVEL_0) < 1e-4
+
+
+def test_a_pinned_pelvis_lowered_within_reach_converges_and_beyond_it_ends_at_the_legs_best_reach(biped):
+    for drop, reachable in ((0.08, True), (0.15, False)):
+        solver = Solver(biped, sweeps=8)
+        pelvis = solver.effector_poses()["pelvis"][:3, 3] + [0.0, 0.0, -drop]
+        history, statuses, worst = _hold(solver, _studio_targets(solver, pulled="pelvis", offset=(0, 0, -drop)), 300)
+        _assert_held(history, statuses)
+        pinned_error = solver.step().errors()["pelvis"][0]
+        if reachable:
+            assert pinned_error < 1e-4
+        else:
+            # Pelvis upright over flat feet: the ankles' 0.5 rad dorsiflexion stops the hips ~9.6 cm down. The best
+            # reach of the pinned level alone (the single-level solve, restarts and all) is where it ends.
+            alone = Solver(biped).solve({n: Target.from_transform(T) if n != "pelvis" else
+                                         Target.from_transform(T).replace(position=pelvis)
+                                         for n, T in solver.effector_poses().items() if n in STUDIO_PINNED})
+            assert not alone.converged
+            assert pinned_error == pytest.approx(alone.errors()["pelvis"][0], abs=2e-3)
