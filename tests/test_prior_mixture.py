@@ -20,7 +20,8 @@ REAL_CLIP = Path(__file__).resolve().parents[2] / "shared" / "mocap" / "mocap_bv
 
 
 def _two_clusters(n: int = 2000, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Biped poses (inside the limits) from two tight, well separated Gaussians (weights 0.7 / 0.3), and the two means (2, n_dofs)."""
+    """Biped poses (inside the limits) from two tight, well separated Gaussians (weights 0.7 / 0.3), and the
+    two means (2, n_dofs)."""
     sk = load_skeleton("biped")
     rng = np.random.default_rng(seed)
     centre, half = 0.5 * (sk.lower + sk.upper), 0.5 * (sk.upper - sk.lower)
@@ -63,7 +64,8 @@ def test_a_mixture_file_round_trips_and_is_not_read_as_a_gaussian(tmp_path):
     back = read_mixture(path)
     assert back.n_components == 2 and back.source == "synthetic" and back.dof_names == sk.dof_names
     np.testing.assert_array_equal(back.covariances, mixture.covariances)
-    with pytest.raises(PriorError, match="not a format-1 pose prior \\(format 2; formats: 1 a Gaussian pose prior, 2 a pose mixture\\)"):
+    with pytest.raises(PriorError, match="not a format-1 pose prior \\(format 2; formats: 1 a Gaussian pose "
+                                         "prior, 2 a pose mixture\\)"):
         read_prior(path)
 
 
