@@ -30,9 +30,19 @@ import numpy as np
 
 from gsik.kernels import priority as kernel
 
-#: Singular values below this fraction of a level's largest are treated as zero: those
-#: directions stay free for the lower levels.
+#: Singular values (of a level's rows seen in the directions the higher levels leave) below this fraction of the
+#: level's largest weighted row norm are treated as zero: those directions stay free for the lower levels. Measured
+#: against the rows themselves, not against what is left of them: a level the higher ones already decide entirely
+#: leaves only rounding (1e-17), which must not take directions from the levels below.
 RANK_TOLERANCE = 1e-9
+#: A step may leave the box by this much [rad] (plus :data:`BOX_RELATIVE_TOLERANCE` times its largest component)
+#: without blocking, and a DOF this close to a bound is on it: rounding, which clipping removes.
+#: A DOF resting on a limit that a level does not move at all gets steps of 1e-17 either way; locking it on their
+#: sign, or choosing between DOFs on their bounds by rooms of 1e-18, made the step depend on rounding (and took that
+#: DOF from every lower level).
+BOX_TOLERANCE = 1e-12
+#: The rounding of a step grows with its size (a tight box under a large step: 1e-11 seen on DOFs the level leaves).
+BOX_RELATIVE_TOLERANCE = 1e-10
 
 
 class Level(NamedTuple):
@@ -129,7 +139,8 @@ def prioritized_step(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray,
         dampings = np.array(np.broadcast_to(dampings, (len(levels),)))
     packed = pack_levels(levels, lo.shape[0])
     dq = np.empty(lo.shape[0])
-    if kernel.prioritized_step(*packed, dampings, lo, hi, RANK_TOLERANCE, dq) != kernel.OK:
+    if kernel.prioritized_step(*packed, dampings, lo, hi, RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE,
+                                 dq) != kernel.OK:
         raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
     return dq
 
@@ -156,9 +167,11 @@ def prioritized_step_svd(levels: Sequence[Level], lo: np.ndarray, hi: np.ndarray
 
 def _solve_level(J, e, dq, Z, locked, lo, hi, damping):
     """One level's active-set loop (updates ``locked``); returns the new ``dq`` and the basis left free below it."""
+    scale = float(np.sqrt((J * J).sum(axis=1)).max()) if J.size else 0.0
     while True:
+        dq = _into_box(dq, lo, hi)
         U, s, Vt = np.linalg.svd(J @ Z, full_matrices=True)
-        rank = int(np.sum(s > RANK_TOLERANCE * (s[0] if s.size else 0.0))) if s.size else 0
+        rank = int(np.sum(s > RANK_TOLERANCE * scale))
         z = Vt[:rank].T @ ((s[:rank] / (s[:rank] ** 2 + damping)) * (U[:, :rank].T @ (e - J @ dq)))
         step = Z @ z
         step[locked] = 0.0
@@ -173,10 +186,19 @@ def _solve_level(J, e, dq, Z, locked, lo, hi, damping):
             return dq, Z
 
 
+def _into_box(dq, lo, hi) -> np.ndarray:
+    """``dq`` clipped into the box, and put on a bound where within :data:`BOX_TOLERANCE` of it: rounding only, but
+    then every DOF resting on a bound has room 0 exactly, and a tie is broken by the DOF's index, not by rounding."""
+    dq = np.clip(dq, lo, hi)
+    dq = np.where(dq - lo <= BOX_TOLERANCE, lo, dq)
+    return np.where(hi - dq <= BOX_TOLERANCE, hi, dq)
+
+
 def _largest_fraction(dq, step, lo, hi) -> tuple[float, int]:
     """The largest ``alpha <= 1`` keeping ``dq + alpha * step`` in the box, and the DOF that blocks (-1: none)."""
     over = dq + step
-    out = np.flatnonzero((over > hi) | (over < lo))
+    tol = BOX_TOLERANCE + BOX_RELATIVE_TOLERANCE * float(np.abs(step).max(initial=0.0))
+    out = np.flatnonzero((over > hi + tol) | (over < lo - tol))
     if out.size == 0:
         return 1.0, -1
     s = step[out]

@@ -100,8 +100,9 @@ def test_zero_posture_weights_leave_the_step_alone(rng):
 @st.composite
 def hard_problems(draw):
     """``(levels, lo, hi, damping)``: up to 30 DOFs and 4 levels, some empty, some with a duplicated or a zero row
-    (rank-deficient), boxes from roomy to so tight that most steps lock DOFs. Rows are random otherwise, so what a
-    level sees of its rows beyond the higher levels' is well conditioned."""
+    (rank-deficient), some leaving DOFs unmoved; boxes from roomy to so tight that most steps lock DOFs, some DOFs
+    resting on a bound (as joints at their limits do at the rest pose). Rows are random otherwise, so what a level
+    sees of its rows beyond the higher levels' is well conditioned."""
     n = draw(st.integers(1, 30))
     rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
     levels = []
@@ -111,9 +112,14 @@ def hard_problems(draw):
             J[-1] = J[0]
         if m >= 1 and draw(st.booleans()):
             J[rng.integers(m)] = 0.0
+        if draw(st.booleans()):
+            J[:, rng.random(n) < 0.3] = 0.0
         levels.append(Level(J, rng.normal(size=m), rng.uniform(0.1, 2.0, size=m)))
     width = draw(st.sampled_from([0.01, 0.3, 3.0]))
     lo, hi = _box(rng, n, width)
+    if draw(st.booleans()):
+        lo[rng.random(n) < 0.3] = 0.0
+        hi[rng.random(n) < 0.3] = 0.0
     return levels, lo, hi, draw(st.sampled_from([1e-3, 1e-6]))
 
 
@@ -167,3 +173,18 @@ def test_packed_levels_keep_each_level_s_rows_in_order(rng):
     np.testing.assert_array_equal(packed.rows, np.vstack([level.jacobian for level in levels]))
     np.testing.assert_array_equal(packed.errors, np.concatenate([level.error for level in levels]))
     np.testing.assert_array_equal(packed.weights, np.concatenate([level.weights for level in levels]))
+
+
+def test_a_dof_resting_on_its_limit_that_a_level_leaves_alone_stays_free_for_the_levels_below(rng):
+    # Level 0 does not move DOF 2 (at its lower limit 0); in the rotated basis its step there is rounding (1e-17, either
+    # sign), which must not lock it: level 1 then bends it to 0.5.
+    n = 5
+    rotation = np.linalg.qr(rng.normal(size=(n, n)))[0]
+    J0 = rng.normal(size=(3, n))
+    J0[:, 2] = 0.0
+    J0 = (J0 @ rotation) @ rotation.T
+    J1 = np.eye(n)[[2]]
+    lo, hi = np.array([-1.0, -1.0, 0.0, -1.0, -1.0]), np.ones(n)
+    levels = [Level(J0, rng.normal(size=3) * 0.1, np.ones(3)), Level(J1, np.array([0.5]), np.ones(1))]
+    for step in (prioritized_step, prioritized_step_svd):
+        np.testing.assert_allclose(step(levels, lo, hi, 1e-9)[2], 0.5, atol=1e-6)
