@@ -56,7 +56,7 @@ def priorities(frames: int = 400) -> None:
     sk = load_skeleton("biped")
     print(f"### Priorities: pelvis, head, left foot at 0; left hand pulled 3 m away; {frames} frames of step()\n")
     print("| method | largest priority-0 error | hand error at the end (best reach) | jitter (last 100 frames) "
-          "| step time (median) |")
+          "| step time (median, held frames too) |")
     print("|---|---|---|---|---|")
     best = Solver(sk)
     best_reach = best.solve(_pull_targets(best, [-3.0, 0.0, 0.0], 1)).errors()["left_hand"][0]

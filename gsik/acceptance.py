@@ -74,7 +74,9 @@ def compare(before: LevelState, after: LevelState, settle: float, floors: np.nda
     """
     tightened = loosened = False
     upto = len(floors) if upto is None else upto
-    levels = zip(before.costs[:upto], before.anchors, after.costs, before.met, after.met, floors)
+    # Plain floats: a loop over NumPy scalars costs more than the whole comparison.
+    levels = zip(before.costs[:upto].tolist(), before.anchors.tolist(), after.costs.tolist(), before.met.tolist(),
+                 after.met.tolist(), floors.tolist())
     for k, (c0, anchor, c1, met0, met1, floor) in enumerate(levels):
         if met0 and met1:
             tightened = tightened or c1 < c0 - floor

@@ -192,9 +192,11 @@ class Controller:
         rows = np.repeat(self._task_level, 6)
         self._level_rows = [np.flatnonzero((rows == k) & (w.reshape(-1) > 0.0)) for k in range(L)]
         self._level_weights = [w.reshape(-1)[r] for r in self._level_rows]
-        # Sums per level as one product each: 0.5 w over each level's error rows, and its tasks' two error columns.
-        self._cost_rows = np.zeros((L + 1, 6 * m))
+        # Sums per level as one product each: 0.5 w over each level's error rows (and a last row over all of
+        # them: the targets' cost), and its tasks' two error columns.
+        self._cost_rows = np.zeros((L + 2, 6 * m))
         self._cost_rows[rows, np.arange(6 * m)] = 0.5 * w.reshape(-1)
+        self._cost_rows[-1] = 0.5 * w.reshape(-1)
         self._band_rows = np.zeros((L + 1, 2 * m))
         self._band_rows[np.tile(self._task_level, 2), np.arange(2 * m)] = 1.0
         per_task = 0.5 * TIGHTEN_FRACTION ** 2 * (w[:, 0] * s.position_tolerance ** 2
@@ -241,8 +243,8 @@ class Controller:
         """
         self._task_errors(R, p)
         e, err = self._e.copy(), self._err
-        costs = self._cost_rows @ (e * e)
-        target_cost = float(costs.sum())
+        sums = self._cost_rows @ (e * e)
+        costs, target_cost = sums[:-1], float(sums[-1])
         met = self._band_rows @ (err > self._band).ravel() == 0.0
         met[-1] = False
         if self._balance is not None:
@@ -452,12 +454,10 @@ def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]
     """The :class:`FrameTask` of each ``{name: gsik.Target}``."""
     tasks = []
     for name, t in targets.items():
-        w = np.zeros(6)
-        w[:3] = t.weight
-        if t.uses_orientation:
-            w[3:] = t.weight * orientation_weight
-        rotation = t.rotation
-        tasks.append(FrameTask(name, skeleton.frame_of(name), t.position, rotation, w, t.priority))
+        wp = t.weight
+        wo = wp * orientation_weight if t.uses_orientation else 0.0
+        w = np.array((wp, wp, wp, wo, wo, wo), dtype=float)
+        tasks.append(FrameTask(name, skeleton.frame_of(name), t.position, t.rotation, w, t.priority))
     return tasks
 
 
