@@ -107,7 +107,8 @@ def _log_likelihood(X: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> float:
     return float(-0.5 * (logdet + np.mean(np.einsum("mi,mi->m", d @ np.linalg.inv(cov), d))))
 
 
-def _regularised(S: np.ndarray, a: float) -> np.ndarray:
+def regularised(S: np.ndarray, a: float) -> np.ndarray:
+    """``S`` (n, n) shrunk towards its diagonal by ``a`` in [0, 1], plus :data:`VARIANCE_FLOOR` on the diagonal."""
     return (1.0 - a) * S + a * np.diag(np.diag(S)) + VARIANCE_FLOOR * np.eye(len(S))
 
 
@@ -125,7 +126,7 @@ def choose_shrinkage(Q: np.ndarray, k: int = CV_SEGMENTS) -> float:
         total = 0.0
         for held in folds:
             train = np.delete(Q, held, axis=0)
-            total += _log_likelihood(Q[held], train.mean(axis=0), _regularised(np.cov(train.T), a))
+            total += _log_likelihood(Q[held], train.mean(axis=0), regularised(np.cov(train.T), a))
         scores.append(total)
     return float(SHRINKAGE_GRID[int(np.argmax(scores))])
 
@@ -135,44 +136,63 @@ def fit_prior(Q: np.ndarray, skeleton: Skeleton, shrinkage: float | None = None,
 
     ``shrinkage`` in [0, 1]; default chosen by :func:`choose_shrinkage`.
     """
+    Q, a = training_poses(Q, skeleton, shrinkage, "a pose prior")
+    return PosePrior(skeleton.name, tuple(skeleton.dof_names), Q.mean(axis=0), regularised(np.cov(Q.T), a),
+                     len(Q), a, source)
+
+
+def training_poses(Q, skeleton: Skeleton, shrinkage: float | None, what: str) -> tuple[np.ndarray, float]:
+    """Poses ``Q`` checked to be (n_frames >= 2 * CV_SEGMENTS, n_dofs) floats, and the shrinkage: ``shrinkage``
+    checked to be in [0, 1], or chosen by :func:`choose_shrinkage` when ``None``; ``what`` names the prior in errors."""
     Q = np.asarray(Q, dtype=float)
     if Q.ndim != 2 or Q.shape[1] != skeleton.n_dofs or len(Q) < 2 * CV_SEGMENTS:
-        raise PriorError(f"a pose prior needs poses (n_frames >= {2 * CV_SEGMENTS}, {skeleton.n_dofs}), "
-                         f"got {Q.shape}")
+        raise PriorError(f"{what} needs poses (n_frames >= {2 * CV_SEGMENTS}, {skeleton.n_dofs}), got {Q.shape}")
     a = choose_shrinkage(Q) if shrinkage is None else float(shrinkage)
     if not 0.0 <= a <= 1.0:
         raise PriorError(f"shrinkage must be in [0, 1], got {shrinkage!r}")
-    return PosePrior(skeleton.name, tuple(skeleton.dof_names), Q.mean(axis=0), _regularised(np.cov(Q.T), a),
-                     len(Q), a, source)
+    return Q, a
 
 
 def write_prior(prior: PosePrior, path: str | os.PathLike) -> None:
     """Write ``prior`` as a ``.npz`` file (see the module docstring)."""
-    try:
-        with open(path, "wb") as f:
-            np.savez(f, format=np.array(FORMAT), skeleton=np.array(prior.skeleton),
-                     dof_names=np.array(prior.dof_names), mean=prior.mean, covariance=prior.covariance,
-                     n_frames=np.array(prior.n_frames), shrinkage=np.array(prior.shrinkage),
-                     source=np.array(prior.source))
-    except OSError as e:
-        raise GsikFileError(f"cannot write pose prior {path}: {e.strerror}") from None
+    write_npz(path, "pose prior", format=FORMAT, skeleton=prior.skeleton, dof_names=prior.dof_names,
+              mean=prior.mean, covariance=prior.covariance, n_frames=prior.n_frames, shrinkage=prior.shrinkage,
+              source=prior.source)
 
 
 def read_prior(path: str | os.PathLike) -> PosePrior:
     """Read a pose prior written by :func:`write_prior` (no pickle)."""
+    d = read_npz(path, "pose prior", FORMAT, ("skeleton", "dof_names", "mean", "covariance", "n_frames",
+                                              "shrinkage", "source"))
+    return PosePrior(str(d["skeleton"]), tuple(str(s) for s in d["dof_names"]), d["mean"], d["covariance"],
+                     int(d["n_frames"]), float(d["shrinkage"]), str(d["source"]))
+
+
+def write_npz(path: str | os.PathLike, what: str, **arrays) -> None:
+    """Write ``arrays`` (names to arrays or scalars) as an ``.npz`` file; ``what`` names it in errors."""
+    try:
+        with open(path, "wb") as f:
+            np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()})
+    except OSError as e:
+        raise GsikFileError(f"cannot write {what} {path}: {e.strerror}") from None
+
+
+def read_npz(path: str | os.PathLike, what: str, format: int, needed: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The arrays of an ``.npz`` file of ``format`` holding ``needed`` (no pickle); :class:`PriorError` otherwise."""
     try:
         with np.load(path, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
     except OSError as e:
-        raise GsikFileError(f"cannot read pose prior {path}: {e.strerror or e}") from None
+        raise GsikFileError(f"cannot read {what} {path}: {e.strerror or e}") from None
     except ValueError as e:
-        raise PriorError(f"{path}: not a pose prior file: {e}") from None
-    needed = ("format", "skeleton", "dof_names", "mean", "covariance", "n_frames", "shrinkage", "source")
-    missing = [k for k in needed if k not in data]
-    if missing or int(data.get("format", -1)) != FORMAT:
-        raise PriorError(f"{path}: not a format-{FORMAT} pose prior (missing {choices(missing)})")
-    return PosePrior(str(data["skeleton"]), tuple(str(s) for s in data["dof_names"]), data["mean"],
-                     data["covariance"], int(data["n_frames"]), float(data["shrinkage"]), str(data["source"]))
+        raise PriorError(f"{path}: not a {what} file: {e}") from None
+    if "format" in data and int(data["format"]) != format:
+        raise PriorError(f"{path}: not a format-{format} {what} (format {int(data['format'])}; formats: "
+                         f"{FORMAT} a Gaussian pose prior, 2 a pose mixture)")
+    missing = [k for k in ("format",) + needed if k not in data]
+    if missing:
+        raise PriorError(f"{path}: not a format-{format} {what} (missing {choices(missing)})")
+    return data
 
 
 def bundled_prior_path(skeleton: str = "biped") -> Path:

@@ -13,6 +13,7 @@ from gsik.cli.progress import progress_for
 from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import write_motion_bvh
 from gsik.prior import fit_prior, write_prior
+from gsik.prior_mixture import fit_mixture, write_mixture
 
 
 def add_commands(add, common) -> None:
@@ -37,8 +38,24 @@ def add_commands(add, common) -> None:
     p.add_argument("--out", metavar="PRIOR.npz", required=True, help="the pose prior file to write")
     p.add_argument("--frames", type=int, help="use only the clip's first N frames")
     p.add_argument("--source", default="", help="what the clip is and its licence, kept in the file")
+    p.add_argument("--components", type=_components, metavar="K|auto",
+                   help="learn a mixture of K Gaussians (gsik.prior_mixture; 'auto': K chosen by cross-validation "
+                        "over time segments) instead of a single Gaussian")
     common(p, solver=False)
     p.set_defaults(run=cmd_learn_prior)
+
+
+def _components(text: str) -> int | str:
+    """``--components``: a count >= 1 or ``auto``."""
+    if text == "auto":
+        return text
+    try:
+        k = int(text)
+    except ValueError:
+        k = 0
+    if k < 1:
+        raise argparse.ArgumentTypeError(f"must be a count >= 1 or 'auto', got {text!r}")
+    return k
 
 
 def _clip_options(p: argparse.ArgumentParser) -> None:
@@ -82,7 +99,14 @@ def cmd_learn_prior(args: argparse.Namespace, out: TextIO) -> int:
     check_out(args.out, (".npz",), "pose prior")
     r = _retarget(args, args.frames)
     _report(r, out)
-    prior = fit_prior(r.motion.q, r.motion.skeleton, source=args.source)
-    write_prior(prior, args.out)
-    print(f"wrote {args.out}: {prior.n_frames} poses, shrinkage {prior.shrinkage:g}", file=out)
+    if args.components is None:
+        prior = fit_prior(r.motion.q, r.motion.skeleton, source=args.source)
+        write_prior(prior, args.out)
+        print(f"wrote {args.out}: {prior.n_frames} poses, shrinkage {prior.shrinkage:g}", file=out)
+        return 0
+    mixture = fit_mixture(r.motion.q, r.motion.skeleton, None if args.components == "auto" else args.components,
+                          source=args.source)
+    write_mixture(mixture, args.out)
+    print(f"wrote {args.out}: {mixture.n_frames} poses, {mixture.n_components} components, "
+          f"shrinkage {mixture.shrinkage:g}", file=out)
     return 0
