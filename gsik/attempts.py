@@ -45,7 +45,11 @@ class AttemptPolicy:
         attempts are compared level by level, and the first further attempt
         starts from the posture; a converged attempt whose posture is not met
         is compared with one from the posture too, as the targets may be met
-        on another branch nearer to it.
+        on another branch nearer to it. With a posture below one level of
+        targets (no priorities, balance or targets off the effectors) each
+        attempt meets the targets on the single-level path first and then
+        settles the posture; when the posture is the start, no attempt
+        repeats the first from it (the first further one is a continuation).
         Each attempt (:func:`gsik.kernels.solve.solve`, or prioritised steps)
         meets the positions first when an orientation is far off
         (``positions_first``). Without priorities, posture or balance, and
@@ -86,7 +90,8 @@ class AttemptPolicy:
         attempts = 1
         if stats[O_STATUS] != Status.CONVERGED and restarts:
             stats, attempts = self._restart(start, stats)
-        elif restarts and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0:
+        elif restarts and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0 \
+                and not self._starts_at_posture(start):
             stats, attempts = self._posture_attempt(stats)
         stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
         return stats, attempts
@@ -144,8 +149,7 @@ class AttemptPolicy:
                          best_q: np.ndarray) -> np.ndarray:
         """Attempt ``attempts + 1``: from the posture or by continuation first, then from the best pose so far
         ``best_q`` (n_dofs,) [rad] with the DOFs it holds on a limit mirrored, then random restarts."""
-        if attempts == 1 and self._posture is not None and not (
-                self._reaches_first() and np.array_equal(self._posture.reference, start)):
+        if attempts == 1 and self._posture is not None and not self._starts_at_posture(start):
             return self._solve_from(self._posture.reference)  # the pose the artist prefers: a natural start
         if attempts == 1:
             return self._solve_by_continuation(start)
@@ -160,6 +164,11 @@ class AttemptPolicy:
         # Random restarts: ever bolder blends of the start with a random pose within the limits.
         alpha = min(1.0, 0.25 * attempts)
         return self._solve_from(start + alpha * (rng.uniform(sk.lower, sk.upper) - start))
+
+    def _starts_at_posture(self, start: np.ndarray) -> bool:
+        """True if an attempt from the posture would repeat the first one, from ``start`` (n_dofs,) [rad]: the
+        posture is ``start`` and the attempts reach first (:meth:`_reaches_first`), which is deterministic."""
+        return self._reaches_first() and np.array_equal(self._posture.reference, start)
 
     def _repeats_best(self, stats: np.ndarray, best: np.ndarray) -> bool:
         """True if an unconverged attempt ended where the best one did (``best`` before this attempt), within
