@@ -209,8 +209,8 @@ def _print(results, target_sets) -> None:
         rest_step = np.median(merged["rest"]["step"])
         for k in POSTURES:
             m = merged[k]
-            print(f"| {s} | {k} | {m['all'].mean():.0f} / {np.percentile(m['all'], 95):.0f} "
-                  f"| {m['interior'].mean():.0f} / {np.percentile(m['interior'], 95):.0f} "
+            print(f"| {s} | {k} | {m['all'].mean():.1f} / {np.percentile(m['all'], 95):.0f} "
+                  f"| {m['interior'].mean():.1f} / {np.percentile(m['interior'], 95):.1f} "
                   f"| {_met(m)} | {m['target'].max():.3f} | {1000 * np.median(m['step']):.2f} "
                   f"| {np.median(m['step']) / rest_step:.2f} | {1000 * np.median(m['solve']):.0f} |")
     print()
