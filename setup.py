@@ -18,7 +18,10 @@ class BuildPyCompilingKernels(build_py):
         super().run()
         if getattr(self, "editable_mode", False):
             return  # an editable install compiles into the source tree's cache at first use
-        env = {**os.environ, "PYTHONPATH": os.path.abspath(self.build_lib)}
+        # pip's build isolation finds the build requirements (numba, NumPy) through PYTHONPATH: keep it, after the
+        # package just built, or a fresh venv's build cannot import NumPy and compiles nothing.
+        inherited = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join([os.path.abspath(self.build_lib), *inherited])}
         env.pop("NUMBA_CACHE_DIR", None)
         env.pop("NUMBA_DISABLE_JIT", None)
         done = subprocess.run([sys.executable, "-m", "gsik._warmup"], env=env, cwd=self.build_lib)

@@ -11,9 +11,12 @@ ROOT = Path(__file__).resolve().parent.parent
 def test_built_package_finds_the_bundled_biped_and_starts_without_compiling(tmp_path):
     # Install a non-editable copy (no dependencies: the test environment has them) into a folder of its own,
     # then import it from outside the repository, so the import can only come from that copy.
-    target = tmp_path / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(target), str(ROOT)],
-                   check=True, capture_output=True, text=True)
+    # pip runs from a fresh venv with nothing installed, as README command 1 does: the build's own environment
+    # (pip's build isolation) must provide what compiling the kernels needs.
+    target, venv = tmp_path / "site", tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, capture_output=True, text=True)
+    subprocess.run([str(venv / "bin" / "python"), "-m", "pip", "install", "-q", "--no-deps", "--target", str(target),
+                    str(ROOT)], check=True, capture_output=True, text=True)
     assert list((target / "gsik").glob("**/__pycache__/*.nbi")), "the build compiled no kernels into the package"
     for package, folder in (("gsik", ROOT / "gsik"), ("gsik_studio", ROOT / "app"), ("gsik/skeletons", ROOT / "skeletons")):
         for source in folder.rglob("*.py"):
