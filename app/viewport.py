@@ -344,10 +344,7 @@ class Viewport:
 
         # Root marker.
         f = doc.skeleton.frame_of(doc.root)
-        M = np.eye(4)
-        M[:3, :3] = R[f]
-        M[:3, 3] = P[f]
-        self.actors["root"].user_matrix = M
+        self.actors["root"].user_matrix = transform(R[f], P[f])
         for layer in self.layers:
             layer.refresh(P, R)
 
