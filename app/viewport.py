@@ -268,7 +268,7 @@ class Viewport:
             return
         t = vtkTransform()
         self.box_widget.GetTransform(t)
-        M = np.array([[t.GetMatrix().GetElement(i, j) for j in range(4)] for i in range(4)])
+        M = pv.array_from_vtkmatrix(t.GetMatrix())
         u, _, vt = np.linalg.svd(M[:3, :3])
         R = u @ vt
         if np.linalg.det(R) < 0:
