@@ -23,6 +23,8 @@ from gsik_studio.viewport import TARGET_COLOR, TARGET_RADIUS, TARGET_SELECTED_CO
 BODY_MODES = ("mannequin", "sticks")
 #: The viewport's actors drawn over the body: the axis rings, the achieved effectors, their triads, error lines.
 OVERLAID = ("gizmos", "effectors", "triads", "errors")
+_MARKER_RGB8 = rgb8(TARGET_COLOR)  # computed once: the markers are recoloured every frame
+_SELECTED_MARKER_RGB8 = rgb8(TARGET_SELECTED_COLOR)
 
 
 def overlay_renderer(plotter) -> vtkRenderer:
@@ -104,7 +106,7 @@ class BodyView:
             t = targets.get(name)
             on = t is not None and bool(vp.target_widgets[i].GetEnabled())
             self._marker_xyz[i] = t.position if on else (0.0, 0.0, -1e3)
-            colors[i] = rgb8(TARGET_SELECTED_COLOR if name == vp.selected else TARGET_COLOR)
+            colors[i] = _SELECTED_MARKER_RGB8 if name == vp.selected else _MARKER_RGB8
         touch(self._markers)
         if not np.array_equal(colors, self._marker_colors):
             self._marker_colors = colors

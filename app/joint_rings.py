@@ -17,6 +17,7 @@ import itertools
 from typing import NamedTuple
 
 import numpy as np
+import pyvista as pv
 from PySide6 import QtCore
 
 from gsik_studio.model.joints import JointEditor
@@ -88,7 +89,7 @@ class JointRings(QtCore.QObject):
         ren = self.viewport.plotter.renderer
         w, h = ren.GetSize()
         aspect = w / max(h, 1)
-        M = _matrix(ren.GetActiveCamera().GetCompositeProjectionTransformMatrix(aspect, -1, 1))
+        M = pv.array_from_vtkmatrix(ren.GetActiveCamera().GetCompositeProjectionTransformMatrix(aspect, -1, 1))
         X = np.c_[points, np.ones(len(points))] @ M.T
         ndc = X[:, :2] / X[:, 3:4]
         x0, y0 = ren.GetOrigin()
@@ -200,7 +201,3 @@ def on_plane(origin: np.ndarray, ray: np.ndarray, centre: np.ndarray, axis: np.n
         return origin + ray * ((centre - origin) @ axis) / (ray @ axis)
     p = origin + ray * ((centre - origin) @ ray)
     return p - ((p - centre) @ axis) * axis
-
-
-def _matrix(m) -> np.ndarray:
-    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])

@@ -268,7 +268,7 @@ class Viewport:
             return
         t = vtkTransform()
         self.box_widget.GetTransform(t)
-        M = np.array([[t.GetMatrix().GetElement(i, j) for j in range(4)] for i in range(4)])
+        M = pv.array_from_vtkmatrix(t.GetMatrix())
         u, _, vt = np.linalg.svd(M[:3, :3])
         R = u @ vt
         if np.linalg.det(R) < 0:
@@ -344,10 +344,7 @@ class Viewport:
 
         # Root marker.
         f = doc.skeleton.frame_of(doc.root)
-        M = np.eye(4)
-        M[:3, :3] = R[f]
-        M[:3, 3] = P[f]
-        self.actors["root"].user_matrix = M
+        self.actors["root"].user_matrix = transform(R[f], P[f])
         for layer in self.layers:
             layer.refresh(P, R)
 

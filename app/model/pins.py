@@ -20,6 +20,7 @@ import numpy as np
 
 import gsik
 from gsik import balance, control
+from gsik.rotations import transform
 from gsik.targets import Target
 from gsik_studio.model.events import Signal
 from gsik_studio.model.posture import Posture
@@ -191,15 +192,9 @@ class SolveControls:
         sk = s.skeleton
         P, R = s.world_positions(), s.world_rotations()
         feet = control.support(sk, s.targets, P)
-        transforms = [_transform(R[f], P[f]) for f in feet.feet]
+        transforms = [transform(R[f], P[f]) for f in feet.feet]
         polygon = balance.support_polygon(transforms, feet.soles)
         ground = float(P[sk.frame_of(sk.root)][2]) if sk.root in sk.soles else 0.0
         com = s.center_of_mass()
         inside = len(polygon) >= 3 and balance.signed_distance(polygon, com[:2]) <= 0.0
         return Support(com, polygon, ground, bool(inside))
-
-
-def _transform(R: np.ndarray, p: np.ndarray) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, p
-    return T
