@@ -35,6 +35,7 @@ from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_
     support_polygon
 from gsik.kinematics import kinematic_model, topology
 from gsik.priority import Level, posture_factor, prioritized_step
+from gsik.rotations import transform
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
@@ -267,7 +268,7 @@ class Controller:
     def _support_goal(self, R, p) -> tuple[np.ndarray, np.ndarray]:
         """The polygon the centre of mass must stay in (support shrunk by the margin) and the centre of mass."""
         b = self._balance
-        feet = [_transform(R[f], p[f]) for f in b.feet]
+        feet = [transform(R[f], p[f]) for f in b.feet]
         goal = shrink(support_polygon(feet, list(b.soles)), BALANCE_MARGIN)
         return goal, center_of_mass(b.mass, R, p)
 
@@ -476,10 +477,3 @@ def support(skeleton, targets, p: np.ndarray) -> Balance:
             or (n in targets and abs(targets[n].position[2] - ground) <= GROUND_TOLERANCE)]
     return Balance(skeleton.mass_model, tuple(skeleton.frame_of(n) for n in feet),
                    tuple(skeleton.soles[n] for n in feet))
-
-
-def _transform(R, p) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = R
-    T[:3, 3] = p
-    return T
