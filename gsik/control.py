@@ -144,8 +144,8 @@ class Controller:
         names = [t.name for t in self._tasks]
         self.names = tuple(names)
         self._topo = topology(skeleton, skeleton.root, names)
-        self._task_model = _kinematics(skeleton, self._topo)
-        self._fk_model = _kinematics(skeleton)
+        self._task_model = kinematic_model(skeleton, self._topo)
+        self._fk_model = kinematic_model(skeleton)
         priorities = [t.priority for t in self._tasks]
         if balance is not None:
             priorities.append(BALANCE_PRIORITY)
@@ -161,7 +161,7 @@ class Controller:
         self._M = np.zeros((3, 3))
         if balance is not None:
             bodies = [skeleton.frame_names[f] for f in balance.mass.body_frame]
-            self._mass_kinematics = _kinematics(skeleton, topology(skeleton, skeleton.root, bodies))
+            self._mass_kinematics = kinematic_model(skeleton, topology(skeleton, skeleton.root, bodies))
             self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
         self.retarget(tasks)
 
@@ -279,7 +279,7 @@ class Controller:
         if error is None:
             self._task_errors(R, p)
             error = self._e
-        _jacobian(self._task_model, R, p, self._J)
+        kernels.jacobian(self._task_model, R, p, self._J)
         out = [self._balance_level_rows(R, p) if k == self._balance_level else Level(self._J[rows], error[rows], w)
                for k, (rows, w) in enumerate(zip(self._level_rows, self._level_weights))]
         if self._posture is not None:
@@ -292,7 +292,7 @@ class Controller:
         n = self._sk.n_dofs
         if signed_distance(goal, com[:2]) <= -BALANCE_BAND:
             return Level(np.zeros((0, n)), np.zeros(0), np.zeros(0))
-        _jacobian(self._mass_kinematics, R, p, self._Jm)
+        kernels.jacobian(self._mass_kinematics, R, p, self._Jm)
         Jc = com_jacobian(self._balance.mass, R, self._Jm)
         return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
 
@@ -421,23 +421,7 @@ class Controller:
         return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
 
     def _frames(self, q, W, R, p) -> None:
-        _forward_kinematics(self._fk_model, q, self._root, W, R, p)
-
-
-# -- the kernels, in one place ------------------------------------------------------------------
-def _kinematics(skeleton, topo=None):
-    """The :class:`~gsik.kernels.KinematicModel` of the frames of ``topo`` (none: forward kinematics only)."""
-    return kinematic_model(skeleton, topo)
-
-
-def _jacobian(model, R, p, J) -> None:
-    """Fill ``J`` (6 m, n_dofs) for the effector frames of ``model``."""
-    kernels.jacobian(model, R, p, J)
-
-
-def _forward_kinematics(model, q, root_frame, W, R, p) -> None:
-    """World frames into ``R``, ``p`` at ``q``, frame ``root_frame`` pinned at ``W``."""
-    kernels.forward_kinematics(model, q, root_frame, W, R, p)
+        kernels.forward_kinematics(self._fk_model, q, self._root, W, R, p)
 
 
 def _ordered(tasks) -> list[FrameTask]:
