@@ -35,6 +35,7 @@ from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_
     support_polygon
 from gsik.kinematics import kinematic_model, topology
 from gsik.priority import Level, posture_factor, prioritized_step
+from gsik.rotations import transform
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
@@ -143,8 +144,8 @@ class Controller:
         names = [t.name for t in self._tasks]
         self.names = tuple(names)
         self._topo = topology(skeleton, skeleton.root, names)
-        self._task_model = _kinematics(skeleton, self._topo)
-        self._fk_model = _kinematics(skeleton)
+        self._task_model = kinematic_model(skeleton, self._topo)
+        self._fk_model = kinematic_model(skeleton)
         priorities = [t.priority for t in self._tasks]
         if balance is not None:
             priorities.append(BALANCE_PRIORITY)
@@ -160,7 +161,7 @@ class Controller:
         self._M = np.zeros((3, 3))
         if balance is not None:
             bodies = [skeleton.frame_names[f] for f in balance.mass.body_frame]
-            self._mass_kinematics = _kinematics(skeleton, topology(skeleton, skeleton.root, bodies))
+            self._mass_kinematics = kinematic_model(skeleton, topology(skeleton, skeleton.root, bodies))
             self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
         self.retarget(tasks)
 
@@ -267,7 +268,7 @@ class Controller:
     def _support_goal(self, R, p) -> tuple[np.ndarray, np.ndarray]:
         """The polygon the centre of mass must stay in (support shrunk by the margin) and the centre of mass."""
         b = self._balance
-        feet = [_transform(R[f], p[f]) for f in b.feet]
+        feet = [transform(R[f], p[f]) for f in b.feet]
         goal = shrink(support_polygon(feet, list(b.soles)), BALANCE_MARGIN)
         return goal, center_of_mass(b.mass, R, p)
 
@@ -278,7 +279,7 @@ class Controller:
         if error is None:
             self._task_errors(R, p)
             error = self._e
-        _jacobian(self._task_model, R, p, self._J)
+        kernels.jacobian(self._task_model, R, p, self._J)
         out = [self._balance_level_rows(R, p) if k == self._balance_level else Level(self._J[rows], error[rows], w)
                for k, (rows, w) in enumerate(zip(self._level_rows, self._level_weights))]
         if self._posture is not None:
@@ -291,7 +292,7 @@ class Controller:
         n = self._sk.n_dofs
         if signed_distance(goal, com[:2]) <= -BALANCE_BAND:
             return Level(np.zeros((0, n)), np.zeros(0), np.zeros(0))
-        _jacobian(self._mass_kinematics, R, p, self._Jm)
+        kernels.jacobian(self._mass_kinematics, R, p, self._Jm)
         Jc = com_jacobian(self._balance.mass, R, self._Jm)
         return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
 
@@ -420,23 +421,7 @@ class Controller:
         return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
 
     def _frames(self, q, W, R, p) -> None:
-        _forward_kinematics(self._fk_model, q, self._root, W, R, p)
-
-
-# -- the kernels, in one place ------------------------------------------------------------------
-def _kinematics(skeleton, topo=None):
-    """The :class:`~gsik.kernels.KinematicModel` of the frames of ``topo`` (none: forward kinematics only)."""
-    return kinematic_model(skeleton, topo)
-
-
-def _jacobian(model, R, p, J) -> None:
-    """Fill ``J`` (6 m, n_dofs) for the effector frames of ``model``."""
-    kernels.jacobian(model, R, p, J)
-
-
-def _forward_kinematics(model, q, root_frame, W, R, p) -> None:
-    """World frames into ``R``, ``p`` at ``q``, frame ``root_frame`` pinned at ``W``."""
-    kernels.forward_kinematics(model, q, root_frame, W, R, p)
+        kernels.forward_kinematics(self._fk_model, q, self._root, W, R, p)
 
 
 def _ordered(tasks) -> list[FrameTask]:
@@ -476,10 +461,3 @@ def support(skeleton, targets, p: np.ndarray) -> Balance:
             or (n in targets and abs(targets[n].position[2] - ground) <= GROUND_TOLERANCE)]
     return Balance(skeleton.mass_model, tuple(skeleton.frame_of(n) for n in feet),
                    tuple(skeleton.soles[n] for n in feet))
-
-
-def _transform(R, p) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = R
-    T[:3, 3] = p
-    return T

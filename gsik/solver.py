@@ -114,6 +114,7 @@ class Solver(AttemptPolicy):
         self._topo: Topology = topology(self._skeleton, root)
         self._model = kinematic_model(self._skeleton, self._topo)
         sk = self._skeleton
+        self._target_frames = frozenset(sk.target_names)  # once, not per target set: set_targets runs per frame
         m = len(self._topo.effector_names)
         self._packed = TargetArrays(np.zeros((m, 3)), np.tile(np.eye(3), (m, 1, 1)), np.zeros((m, 6)))
         # q and the errors live in one buffer so a result copies them at once.
@@ -252,10 +253,6 @@ class Solver(AttemptPolicy):
         self._targets.pop(name, None)
         self._targets.update(checked)
         self._pack_targets()
-
-    @property
-    def _target_frames(self) -> frozenset:
-        return frozenset(self._skeleton.target_names)
 
     def _check_targets(self, targets: Mapping[str, Target | None]) -> dict[str, Target]:
         if not isinstance(targets, Mapping):
