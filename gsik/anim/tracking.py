@@ -216,13 +216,8 @@ def track_clip(
     Q, seconds, steps, statuses = _follow(solver, clip, steps_per_frame, reference, posture_weight, progress)
     measured = _measure(skeleton, root, Q, clip, motion, plan)
     solved = Motion(skeleton, Q, (root,) * motion.n_frames, clip.world_from_root, motion.frame_time)
-    return TrackResult(solved, names, *measured[:2], _readonly(seconds), _readonly(steps), tuple(statuses),
-                       *measured[2:])
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
+    return TrackResult(solved, names, *measured[:2], validate.frozen(seconds), validate.frozen(steps, np.int64),
+                       tuple(statuses), *measured[2:])
 
 
 def _check_inputs(skeleton: Skeleton, motion: Motion, steps_per_frame: int) -> None:
@@ -319,7 +314,8 @@ def _measure(skeleton: Skeleton, root: str, Q: np.ndarray, clip: ClipTargets, mo
         clip_p = motion.frames(f)[1]
         body_err[f] = np.linalg.norm(p[mine] - clip_p[theirs], axis=1)
         heights[f] = np.ptp(clip_p[:, 2])
-    return (_readonly(pos), _readonly(ori), tuple(body), _readonly(body_err), float(np.median(heights)))
+    return (validate.frozen(pos), validate.frozen(ori), tuple(body), validate.frozen(body_err),
+            float(np.median(heights)))
 
 
 def _shared_names(skeleton: Skeleton, clip_sk: Skeleton) -> list[str]:
