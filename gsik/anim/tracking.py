@@ -27,6 +27,7 @@ import numpy as np
 from gsik import validate
 from gsik.errors import SolverError
 from gsik.kinematics import world_frames
+from gsik.rotations import angle_between
 from gsik.anim.motion import Motion
 from gsik.skeleton import Skeleton
 from gsik.solver import Solver, Status
@@ -289,8 +290,7 @@ def _meets(solver: Solver, targets: dict) -> bool:
         if np.linalg.norm(p[i] - t.position) > s.position_tolerance:
             return False
         if t.uses_orientation:
-            cos = 0.5 * (np.trace(R[i].T @ t.rotation) - 1.0)
-            if np.arccos(np.clip(cos, -1.0, 1.0)) > s.orientation_tolerance:
+            if angle_between(R[i], t.rotation) > s.orientation_tolerance:
                 return False
     return True
 
