@@ -27,6 +27,7 @@ import numpy as np
 from gsik import validate
 from gsik.errors import SolverError
 from gsik.kinematics import world_frames
+from gsik.rotations import angle_between
 from gsik.anim.motion import Motion
 from gsik.skeleton import Skeleton
 from gsik.solver import Solver, Status
@@ -216,13 +217,8 @@ def track_clip(
     Q, seconds, steps, statuses = _follow(solver, clip, steps_per_frame, reference, posture_weight, progress)
     measured = _measure(skeleton, root, Q, clip, motion, plan)
     solved = Motion(skeleton, Q, (root,) * motion.n_frames, clip.world_from_root, motion.frame_time)
-    return TrackResult(solved, names, *measured[:2], _readonly(seconds), _readonly(steps), tuple(statuses),
-                       *measured[2:])
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
+    return TrackResult(solved, names, *measured[:2], validate.frozen(seconds), validate.frozen(steps, np.int64),
+                       tuple(statuses), *measured[2:])
 
 
 def _check_inputs(skeleton: Skeleton, motion: Motion, steps_per_frame: int) -> None:
@@ -294,8 +290,7 @@ def _meets(solver: Solver, targets: dict) -> bool:
         if np.linalg.norm(p[i] - t.position) > s.position_tolerance:
             return False
         if t.uses_orientation:
-            cos = 0.5 * (np.trace(R[i].T @ t.rotation) - 1.0)
-            if np.arccos(np.clip(cos, -1.0, 1.0)) > s.orientation_tolerance:
+            if angle_between(R[i], t.rotation) > s.orientation_tolerance:
                 return False
     return True
 
@@ -319,7 +314,8 @@ def _measure(skeleton: Skeleton, root: str, Q: np.ndarray, clip: ClipTargets, mo
         clip_p = motion.frames(f)[1]
         body_err[f] = np.linalg.norm(p[mine] - clip_p[theirs], axis=1)
         heights[f] = np.ptp(clip_p[:, 2])
-    return (_readonly(pos), _readonly(ori), tuple(body), _readonly(body_err), float(np.median(heights)))
+    return (validate.frozen(pos), validate.frozen(ori), tuple(body), validate.frozen(body_err),
+            float(np.median(heights)))
 
 
 def _shared_names(skeleton: Skeleton, clip_sk: Skeleton) -> list[str]:

@@ -27,15 +27,15 @@ def children(elem: ET.Element, tag: str) -> list[ET.Element]:
 
 def number(token: str, where: str) -> float:
     """``token`` as a finite float; ``where`` names the place in the error message."""
-    if _NUMBER_RE.fullmatch(token) and np.isfinite(value := float(token)):
-        return value
     try:
         value = float(token)
     except ValueError:
         raise UrdfError(f"{where}: non-numeric value {token!r}") from None
     if not np.isfinite(value):
         raise UrdfError(f"{where}: non-finite value {token!r}")
-    raise UrdfError(f"{where}: non-numeric value {token!r}")
+    if not _NUMBER_RE.fullmatch(token):  # float() also takes "1_0" and " 1 "
+        raise UrdfError(f"{where}: non-numeric value {token!r}")
+    return value
 
 
 def vector_attr(elem: ET.Element | None, attr: str, default: tuple[float, ...], where: str) -> np.ndarray:
