@@ -21,9 +21,9 @@ import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-import yaml
-
-from gsik.errors import GsikFileError, RetargetError, choices
+from gsik.errors import RetargetError, choices
+from gsik.io.files import read_text
+from gsik.io.yaml_safe import load_yaml
 
 #: Aliases (normalised) of the biped's frames without a side.
 CENTRE_ALIASES = {
@@ -77,12 +77,8 @@ def guess_mapping(clip_names: Sequence[str], frame_names: Sequence[str]) -> dict
 
 def read_mapping(path: str | Path) -> dict[str, str]:
     """A mapping file's ``map`` (biped frame -> clip joint); see the module docstring."""
-    try:
-        data = yaml.safe_load(Path(path).read_text())
-    except OSError as e:
-        raise GsikFileError(f"cannot read mapping file {path}: {e.strerror}") from None
-    except yaml.YAMLError as e:
-        raise RetargetError(f"{path}: not YAML: {e}") from None
+    # The one bounded reader every other format uses: size, depth and alias expansion limited, lines named.
+    data = load_yaml(read_text(path, "mapping file"), str(path), RetargetError).data
     if not isinstance(data, dict) or not isinstance(data.get("map"), dict):
         raise RetargetError(f"{path}: a mapping file needs a 'map:' of biped frame: clip joint, got {data!r:.80}")
     return {str(k): str(v) for k, v in data["map"].items()}
