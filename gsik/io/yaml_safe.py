@@ -106,12 +106,33 @@ def _parse_into(builder: _Builder, text: str, source: str, error: type[GsikError
         for event in yaml.parse(text, Loader=_Loader):
             builder.feed(event)
     except yaml.MarkedYAMLError as exc:
+        if _Loader is not yaml.SafeLoader:
+            _refuse_as_gsik_would(text, exc, source, error)
         mark = exc.problem_mark or exc.context_mark
         line = f":{mark.line + 1}" if mark is not None else ""
         problem = exc.problem or exc.context or "malformed YAML"
         raise error(f"{source}{line}: not valid YAML: {problem}") from None
     except yaml.YAMLError as exc:  # ReaderError: a character the check above did not foresee
         raise error(f"{source}: not valid YAML: {show_value(str(exc))}") from None
+
+
+def _refuse_as_gsik_would(text: str, exc: yaml.MarkedYAMLError, source: str, error: type[GsikError]) -> None:
+    """Raise gsik's own refusal if the text up to libyaml's error breaks one of gsik's bounds.
+
+    libyaml scans a flow collection (``[[[...``) to its end before the first event, so its own limits (a nesting
+    depth since PyYAML 6.0.4) can fire before :class:`_Builder` sees the depth. PyYAML's pure-Python parser yields
+    events as it goes: re-reading the text up to the error's position with it gives gsik's refusal (file, line,
+    limit) whatever libyaml's version; anything else falls through to libyaml's own error.
+    """
+    mark = exc.problem_mark or exc.context_mark
+    if mark is None or mark.index is None:
+        return
+    builder = _Builder(source, error)
+    try:
+        for event in yaml.parse(text[: mark.index], Loader=yaml.SafeLoader):
+            builder.feed(event)
+    except yaml.YAMLError:
+        return
 
 
 class _Collection:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from waiting import wait_for
 
 pytestmark = pytest.mark.gui
 
@@ -52,7 +53,7 @@ def _click(window, xy):
 
 
 def _settle(qtbot, window):
-    qtbot.waitUntil(lambda: not window.doc.needs_solving, timeout=10000)
+    wait_for(qtbot, lambda: not window.doc.needs_solving)
 
 
 def _ring_grip(window, dof):
@@ -260,5 +261,5 @@ def test_a_pole_gizmo_dragged_with_the_mouse_swings_the_knee(window, qtbot):
     assert window.joints.selected is None  # the pole widget took the press, not the rings
     assert doc.controls.poles["left_knee"].position[0] < knee0[0] - 0.05
     # The pole is the lowest level: the knee swings over a few dozen frames (slowly on a loaded machine).
-    qtbot.waitUntil(lambda: doc.controls.joint_position("left_knee")[0] < knee0[0] - 0.02, timeout=30000)
+    wait_for(qtbot, lambda: doc.controls.joint_position("left_knee")[0] < knee0[0] - 0.02)
     assert np.linalg.norm(doc.effector_poses()["pelvis"][:3, 3] - pelvis) < 1e-3

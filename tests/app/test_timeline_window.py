@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from waiting import wait_for
 
 pytestmark = pytest.mark.gui
 
@@ -42,10 +43,10 @@ def test_clicking_the_slider_scrubs_and_play_button_plays_on(qtbot, window):
     assert window.doc.history.undo_text.startswith("Scrub")
     qtbot.mouseClick(bar.buttons["play"], Qt.LeftButton)  # play on from there
     assert tl.playing and window.play_timer.isActive()
-    qtbot.waitUntil(lambda: tl.frame > 70, timeout=10000)
+    wait_for(qtbot, lambda: tl.frame > 70)
     qtbot.mouseClick(bar.buttons["loop"], Qt.LeftButton)
     assert tl.loop
-    qtbot.waitUntil(lambda: tl.frame < 30, timeout=20000)  # started over instead of ending
+    wait_for(qtbot, lambda: tl.frame < 30)  # started over instead of ending
     assert tl.playing
     qtbot.mouseClick(bar.buttons["stop"], Qt.LeftButton)
     assert not tl.playing and tl.frame == 0

@@ -9,6 +9,7 @@ import pytest
 
 import gsik
 from gsik.io.bvh import read_bvh
+from waiting import wait_for
 
 pytestmark = pytest.mark.gui
 
@@ -41,7 +42,7 @@ def test_export_pose_then_walk_clip_then_reimport_it_onto_the_timeline(qtbot, wi
     assert window.files.import_clip_path(clip_path) is True  # the biped's own clip: on this document
     tl = doc.timeline
     assert tl.clip is not None and tl.clip.n_frames == n and tl.name == "walk.bvh" and tl.playing
-    qtbot.waitUntil(lambda: not tl.playing, timeout=20000)
+    wait_for(qtbot, lambda: not tl.playing)
     pelvis = doc.world_positions()[doc.skeleton.frame_of("pelvis")]
     assert pelvis[1] > 0.15  # the re-imported walk walked forward
 
@@ -101,7 +102,7 @@ def test_import_skeleton_rebuilds_this_window_asking_first_about_unsaved_changes
     name = sorted(doc.targets)[0]
     doc.move_target(name, np.array(doc.targets[name].position) + [0.0, 0.0, -0.05])
     assert window.timer.isActive()  # the new document's frame loop drives this window's timer
-    qtbot.waitUntil(lambda: not window.timer.isActive(), timeout=20000)
+    wait_for(qtbot, lambda: not window.timer.isActive())
     assert doc.last_result is not None
     widget = window.viewport.target_widgets[window.viewport._sites.index(name)]
     np.testing.assert_allclose(widget.GetCenter(), doc.targets[name].position, atol=1e-9)
@@ -122,7 +123,7 @@ def test_import_skeleton_in_a_new_window_keeps_this_one(qtbot, window, monkeypat
         assert not other.act_root_left.isEnabled() and window.act_root_left.isEnabled()  # no feet to pin
         name = sorted(doc.targets)[0]
         doc.move_target(name, np.array(doc.targets[name].position) + [0.0, 0.0, -0.05])
-        qtbot.waitUntil(lambda: not other.timer.isActive(), timeout=20000)
+        wait_for(qtbot, lambda: not other.timer.isActive())
         assert doc.last_result is not None
         assert window.doc.skeleton.name == "biped"  # this window's document is untouched
     finally:
@@ -137,7 +138,7 @@ def test_import_a_clip_of_another_skeleton_plays_in_this_window_on_its_own_docum
     tl = doc.timeline
     assert doc.skeleton.name == "walk_zxy" and tl.clip is not None and tl.n_frames == 4 and not window.others
     assert _shows_skeleton(window, doc.skeleton)
-    qtbot.waitUntil(lambda: not tl.playing, timeout=20000)
+    wait_for(qtbot, lambda: not tl.playing)
     assert tl.frame == tl.n_frames - 1
 
 

@@ -9,6 +9,7 @@ import sys
 
 import numpy as np
 import pytest
+from waiting import wait_for
 
 pytestmark = pytest.mark.gui
 
@@ -62,7 +63,7 @@ def test_frame_all_repaints_at_once(qtbot, window, how):
         qtbot.mouseMove(window.plotter)
         qtbot.keyClick(window.plotter, QtCore.Qt.Key_F)
     assert np.linalg.norm(np.array(cam.position) - np.array(cam.focal_point)) < 10
-    qtbot.waitUntil(lambda: len(renders) > 0, timeout=1000)  # the new camera is on screen without another event
+    wait_for(qtbot, lambda: len(renders) > 0)  # the new camera is on screen without another event
 
 
 def test_orbit_keeps_the_horizon_level(qtbot, window):
@@ -97,7 +98,7 @@ def test_view_keys_over_the_view_never_type_into_a_focused_spin_box(qtbot, windo
 
     spin = window.rows["left_hand"].weight
     spin.setFocus()
-    qtbot.waitUntil(spin.hasFocus, timeout=1000)
+    wait_for(qtbot, spin.hasFocus)
     weight = window.doc.targets["left_hand"].weight
     QTest.mouseMove(window.plotter, QtCore.QPoint(300, 300))
     for key in (QtCore.Qt.Key_1, QtCore.Qt.Key_5, QtCore.Qt.Key_7):
@@ -128,7 +129,7 @@ def test_frame_selected_zooms_on_the_selected_target(qtbot, window):
     cam = window.plotter.camera
     assert np.linalg.norm(np.subtract(cam.position, cam.focal_point)) < 0.6 * before
     np.testing.assert_allclose(cam.focal_point, window.doc.targets["left_hand"].position, atol=0.05)
-    qtbot.waitUntil(lambda: len(renders) > 0, timeout=1000)
+    wait_for(qtbot, lambda: len(renders) > 0)
 
 
 def test_help_lists_the_shortcuts(qtbot, window):
@@ -181,7 +182,7 @@ def test_crouch_ends_as_gsik_scenarios_says(qtbot, window):
 
     names = [a.text() for a in window.scenario_menu.actions()]
     window.scenario_menu.actions()[names.index("crouch")].trigger()
-    qtbot.waitUntil(lambda: not window.timer.isActive(), timeout=30000)
+    wait_for(qtbot, lambda: not window.timer.isActive())
     report = run_scenario(builtin_scenario(window.doc.skeleton, "crouch"))
     assert report.status.label == "converged"
     assert window.doc.last_result.status is report.status

@@ -9,6 +9,7 @@ import time
 
 import numpy as np
 import pytest
+from waiting import wait_for
 
 pytestmark = pytest.mark.gui
 
@@ -28,7 +29,7 @@ def test_walk_plays_in_real_time(qtbot, window):
     assert pb is not None
     duration = pb.n_frames * pb.frame_time  # 3.6 s of motion
     t0 = time.perf_counter()
-    qtbot.waitUntil(lambda: window.playback is None, timeout=60000)
+    wait_for(qtbot, lambda: window.playback is None)
     elapsed = time.perf_counter() - t0
     assert elapsed < 1.3 * duration + 0.5, f"{elapsed:.1f} s for {duration:.1f} s of motion"
 
@@ -48,7 +49,7 @@ def test_stop_button_stops_the_walk(qtbot, window):
 
     start = _pelvis(window)
     window.play_walk(n_steps=4)
-    qtbot.waitUntil(lambda: np.linalg.norm(_pelvis(window) - start) > 0.05, timeout=30000)  # walking
+    wait_for(qtbot, lambda: np.linalg.norm(_pelvis(window) - start) > 0.05)  # walking
     qtbot.mouseClick(window.timeline_bar.buttons["stop"], Qt.LeftButton)
     assert window.playback is None and not window.play_timer.isActive()
     np.testing.assert_allclose(_pelvis(window), start, atol=0.02)  # back on the first frame
@@ -71,7 +72,7 @@ def test_walk_stays_in_view_and_ends_where_it_stopped(qtbot, window):
     pb = window.play_walk(n_steps=4)
     motion = pb.motion
     camera = _camera(window)
-    qtbot.waitUntil(lambda: window.playback is None, timeout=60000)
+    wait_for(qtbot, lambda: window.playback is None)
     assert not outside, f"the body left the view at {outside[:3]}"
     np.testing.assert_array_equal(_camera(window), camera)  # the camera did not jump at the end
     np.testing.assert_array_equal(window.doc.q, np.clip(motion.q[-1], window.doc.skeleton.lower,

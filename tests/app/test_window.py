@@ -10,15 +10,16 @@ import numpy as np
 import pytest
 
 import gsik
+from waiting import wait_for
 
 pytestmark = pytest.mark.gui
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
-def _ticks(qtbot, window, until, timeout_ms=5000):
+def _ticks(qtbot, window, until):
     """Let the real frame timer run until ``until()`` holds."""
-    qtbot.waitUntil(until, timeout=timeout_ms)
+    wait_for(qtbot, until)
 
 
 def _drag(window, start_world, delta_px, steps=8):
@@ -323,7 +324,7 @@ def test_walk_button_plays_a_walk_as_one_undo_step(qtbot, window):
     pb = window.play_walk(n_steps=1)
     assert pb is not None and window.play_timer.isActive()
     window.play_timer.setInterval(1)  # play as fast as it draws
-    qtbot.waitUntil(lambda: window.playback is None, timeout=90000)  # render-bound: 0.3 s a frame at load 13
+    wait_for(qtbot, lambda: window.playback is None)  # render-bound: 0.3 s a frame at load 13
     assert roots >= {"left_foot", "right_foot"}  # the root swapped between the feet
     moved = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("pelvis")] - pelvis
     assert moved[1] > 0.15  # walked forward (+y)
@@ -344,7 +345,7 @@ def test_scenario_menu_loads_targets_and_the_solver_settles_them(qtbot, window):
     assert window.doc.history.undo_text == "Scenario kneel"
     j = sc.effectors.index("pelvis")
     np.testing.assert_allclose(window.doc.targets["pelvis"].position, sc.positions[-1, j], atol=1e-12)
-    qtbot.waitUntil(lambda: not window.timer.isActive(), timeout=20000)
+    wait_for(qtbot, lambda: not window.timer.isActive())
     pelvis = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("pelvis")]
     assert pelvis[2] < pelvis_before - 0.1  # kneeling: the pelvis went down
     assert np.linalg.norm(pelvis - sc.positions[-1, j]) < 0.02
@@ -358,7 +359,7 @@ def test_animated_scenario_plays_its_frames(qtbot, window):
     window.scenario_menu.actions()[names.index("wave")].trigger()
     assert window.playback is not None and window.playback.n_frames > 1
     window.play_timer.setInterval(1)  # play as fast as it draws
-    qtbot.waitUntil(lambda: window.playback is None, timeout=90000)  # render-bound: 0.3 s a frame at load 13
+    wait_for(qtbot, lambda: window.playback is None)  # render-bound: 0.3 s a frame at load 13
     assert window.doc.history.undo_text == "Scenario wave (animated)"
     hand = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("right_hand")]
     head = window.doc.solver.world_positions()[window.doc.skeleton.frame_of("head")]
