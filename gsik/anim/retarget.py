@@ -37,8 +37,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from gsik.anim.motion import Motion
-from gsik.anim.retarget_map import resolve_mapping
-from gsik.errors import RetargetError, choices
+from gsik.anim.retarget_map import resolve_mapping, skeleton_bones
+from gsik.errors import RetargetError
+from gsik.humanoid import Rig, rig_from_clip
 from gsik.io.bvh import BvhClip, bvh_forward_kinematics
 from gsik.io.bvh_skeleton import Z_UP_TO_Y_UP, detect_up
 from gsik.kinematics import world_frames
@@ -178,15 +179,12 @@ def _targetable(skeleton: Skeleton) -> list[str]:
     return sorted((f for f in skeleton.target_names if f in PRIORITIES or f == "pelvis"), key=skeleton.frame_of)
 
 
-def _required_mapping(names: list[str], targetable: list[str], mapping: Mapping[str, str] | None) -> dict[str, str]:
-    """``{skeleton frame: clip joint}`` by the heuristics and ``mapping``; :class:`RetargetError` if a
-    :data:`REQUIRED` frame is left without a clip joint."""
-    found = resolve_mapping(names, targetable, mapping)
-    missing = [f for f in REQUIRED if f not in found]
-    if missing:
-        raise RetargetError(f"cannot retarget: no clip joint maps to {choices(missing)} (clip joints: "
-                            f"{choices(names)}); name them in a mapping file")
-    return found
+def _required_mapping(rig: Rig, skeleton: Skeleton, targetable: list[str],
+                      mapping: Mapping[str, str] | None) -> dict[str, str]:
+    """``{skeleton frame: clip joint}`` from the humanoid recognition of both and ``mapping``, in ``targetable``'s
+    order; :class:`RetargetError` if a required bone is missing in the clip."""
+    found = resolve_mapping(rig, skeleton_bones(skeleton), mapping)
+    return {f: found[f] for f in targetable if f in found}
 
 
 def _unmapped(targetable: list[str], names: list[str], mapping: dict[str, str]) -> tuple[tuple[str, ...], ...]:
@@ -226,7 +224,7 @@ class Retargeter:
                  up: str | None = None):
         names = [j.name for j in clip.joints]
         targetable = _targetable(skeleton)
-        found = _required_mapping(names, targetable, mapping)
+        found = _required_mapping(rig_from_clip(clip), skeleton, targetable, mapping)
         self.skeleton = skeleton
         self.up = detect_up(clip) if up is None else up
         index = {n: k for k, n in enumerate(names)}
