@@ -204,14 +204,14 @@ NUMBERED = _c("numbers", [("0", "hips"), ("1", "spine"), ("2", "chest"), ("3", "
                **_limbs(("{s}1", "{s}2", "{s}3"), ("{s}5", "{s}6", "{s}7"), "{s}0"), "Toes": "{s}8"})
 
 
-def _place(part: str, side: int, n_trunk: int, a_pose: bool) -> np.ndarray:
+def _place(part: str, side: int, n_trunk: int, a_pose: bool, body: dict | None = None) -> np.ndarray:
     """A part's rest position (y up, left +x): ``side`` +1 left, -1 right, 0 the trunk."""
     if part.startswith("trunk"):
         k = int(part[5:])
         return np.array([0.0, 100.0 + (152.0 - 100.0) * (k + 1) / (n_trunk + 1), 0.0])
     if part == "Floor":
         return np.zeros(3)
-    p = np.array(BODY[part], dtype=float)
+    p = np.array({**BODY, **(body or {})}[part], dtype=float)
     if a_pose and part in ("LowerArm", "Hand", "Finger"):  # the arm 45 degrees down from the shoulder joint
         d = p - np.array(BODY["UpperArm"])
         p = np.array(BODY["UpperArm"]) + np.linalg.norm(d) * np.array([np.sqrt(0.5), -np.sqrt(0.5), 0.0])
@@ -227,8 +227,10 @@ class TestRig:
     expect: dict
 
 
-def build(conv: Convention, a_pose: bool = False, up: str = "y") -> TestRig:
-    """``conv``'s rig in T- or A-pose, ``up`` ``"y"`` or ``"z"``."""
+def build(conv: Convention, a_pose: bool = False, up: str = "y", body: dict | None = None,
+          motion: np.ndarray | None = None) -> TestRig:
+    """``conv``'s rig in T- or A-pose, ``up`` ``"y"`` or ``"z"``; ``body`` overrides :data:`BODY` places,
+    ``motion`` (n_frames, n_channels) the clip's frames (default one frame at rest)."""
     names, parents, pos = [], [], []
     n_trunk = len(conv.trunk)
 
@@ -241,12 +243,12 @@ def build(conv: Convention, a_pose: bool = False, up: str = "y") -> TestRig:
     def place(part, side):
         kind, _, base = part.partition(":")
         if kind in ("at", "twist"):
-            return _place(base, side, n_trunk, a_pose)
+            return _place(base, side, n_trunk, a_pose, body)
         if kind == "mid":
             nxt = {"UpperArm": "LowerArm", "LowerArm": "Hand", "UpperLeg": "LowerLeg", "LowerLeg": "Foot",
                    "Shoulder": "UpperArm"}[base]
-            return 0.5 * (_place(base, side, n_trunk, a_pose) + _place(nxt, side, n_trunk, a_pose))
-        return _place(part, side, n_trunk, a_pose)
+            return 0.5 * (_place(base, side, n_trunk, a_pose, body) + _place(nxt, side, n_trunk, a_pose, body))
+        return _place(part, side, n_trunk, a_pose, body)
 
     trunk_index = {}
     last = -1
@@ -278,7 +280,7 @@ def build(conv: Convention, a_pose: bool = False, up: str = "y") -> TestRig:
     if up == "z":
         P = P[:, [0, 2, 1]] * [1.0, -1.0, 1.0]
     rig = depth_first(Rig(tuple(names), tuple(parents), P))
-    return TestRig(rig, clip_of(rig), expect)
+    return TestRig(rig, clip_of(rig, motion), expect)
 
 
 def depth_first(rig: Rig) -> Rig:
@@ -316,7 +318,21 @@ def clip_of(rig: Rig, motion: np.ndarray | None = None) -> BvhClip:
         offset = P[j] - P[p] if p >= 0 else P[j]
         joints.append(BvhJoint(bvh_name(name), p, offset, () if leaf else (ROOT if p < 0 else ZYX), is_end_site=leaf))
     n = sum(len(j.channels) for j in joints)
-    if motion is None:
-        motion = np.zeros((1, n))
-        motion[0, :3] = P[0]
+    if motion is None or motion.shape[1] != n:  # rest, or waves of the given frame count
+        motion = rest_motion(n, P[0]) if motion is None else wave_motion(len(motion), n, P[0])
     return BvhClip(tuple(joints), 1 / 30, motion)
+
+
+def rest_motion(n_channels: int, root: np.ndarray) -> np.ndarray:
+    """One frame at rest: the root at ``root``, no rotation."""
+    m = np.zeros((1, n_channels))
+    m[0, :3] = root
+    return m
+
+
+def wave_motion(n_frames: int, n_channels: int, root: np.ndarray, amplitude: float = 25.0) -> np.ndarray:
+    """Every rotation channel swinging by up to ``amplitude`` degrees on its own phase, the root walking."""
+    t = np.arange(n_frames)[:, None] / 30.0
+    m = amplitude * np.sin(2.0 * np.pi * 0.7 * t + np.arange(n_channels) * 1.3)
+    m[:, :3] = root + np.array([1.0, 0.0, 2.0]) * 30.0 * t
+    return m
