@@ -32,7 +32,7 @@ reported; so is every mapped frame's error per clip frame.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -208,6 +208,16 @@ def _with_direction(found: dict[str, str], anchor: dict, rest_points: np.ndarray
             if anchor[f] is None or np.linalg.norm(at[f] - at[anchor[f]]) > 1e-6 / scale}
 
 
+def widened(skeleton: Skeleton, margin: float) -> Skeleton:
+    """``skeleton`` with the ranges of its ball joints (two or more DOFs) widened by ``margin`` each side [rad];
+    hinges (knees, elbows) keep theirs, so a straight limb never bends the wrong way."""
+    ball = np.zeros(skeleton.n_dofs, dtype=bool)
+    for dofs in skeleton.joint_dofs:
+        if len(dofs) >= 2:
+            ball[list(dofs)] = True
+    return replace(skeleton, lower=skeleton.lower - margin * ball, upper=skeleton.upper + margin * ball)
+
+
 class Retargeter:
     """Retargets clips of one rig onto one skeleton (reuse it for every clip of that rig).
 
@@ -219,6 +229,9 @@ class Retargeter:
             (:mod:`gsik.anim.retarget_map`).
         up: The clip's up axis, ``"y"`` or ``"z"``; default detected over the clip.
         name: The clip's name in messages.
+        limit_margin: How far beyond the skeleton's ball joints' limits the retargeted pose may go, each side
+            [rad] (:func:`widened`): real motion (a kneel, a climb) exceeds the biped's authoring ranges.
+            0 keeps them.
 
     Raises:
         RetargetError: a bad mapping entry, a required bone missing in the clip or the skeleton, or a pelvis
@@ -226,8 +239,10 @@ class Retargeter:
     """
 
     def __init__(self, skeleton: Skeleton, clip: BvhClip, mapping: Mapping[str, str] | None = None,
-                 up: str | None = None, *, name: str = "clip"):
+                 up: str | None = None, *, name: str = "clip", limit_margin: float = 0.0):
         names = [j.name for j in clip.joints]
+        if limit_margin:
+            skeleton = widened(skeleton, limit_margin)
         frames = skeleton_bones(skeleton)
         targetable = _targetable(skeleton, frames)
         found = resolve_mapping(rig_from_clip(clip), frames, mapping, clip=name)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from typing import TextIO
 
 from gsik.anim.retarget import Retargeted, Retargeter
@@ -24,6 +25,9 @@ def add_commands(add, common) -> None:
             "lengths, by priority (feet, hands, head; then knees, elbows, toes, neck; then shoulders, hips, "
             "spine), warm-started. Prints each mapped joint's error and what could not be mapped.")
     _clip_options(p)
+    p.add_argument("--limit-margin", type=float, default=30.0, metavar="DEG",
+                   help="let the retargeted pose exceed the target's joint limits by this much each side "
+                        "(default 30: real motion exceeds the biped's authoring ranges; 0 keeps them)")
     p.add_argument("--onto", metavar="SKELETON", default="biped",
                    help="the humanoid to retarget onto: a bundled skeleton, a skeleton .yaml, a .urdf or a .bvh "
                         "clip's skeleton (default biped)")
@@ -74,7 +78,7 @@ def _retarget(args: argparse.Namespace, frames: int | None = None) -> Retargeted
         clip = type(clip)(clip.joints, clip.frame_time, clip.motion[:frames])
     mapping = read_mapping(args.map) if args.map else None
     rt = Retargeter(load_any_skeleton(getattr(args, "onto", "biped")), clip, mapping, None if args.file_up == "auto" else args.file_up,
-                    name=args.clip)
+                    name=args.clip, limit_margin=math.radians(getattr(args, "limit_margin", 0.0)))
     with progress_for(args, "retarget") as bar:
         return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
 

@@ -88,3 +88,25 @@ def test_a_target_that_is_no_humanoid_is_refused_naming_what_is_missing():
     urdf = Path(__file__).resolve().parents[1] / "data" / "two_link_arm.urdf"
     with pytest.raises(RetargetError, match="is no humanoid gsik can retarget onto.*no joint found for"):
         Retargeter(skeleton_from_urdf(urdf), clip)
+
+
+def test_the_limit_margin_widens_ball_joints_only_and_lets_a_deep_bend_through():
+    from gsik import load_skeleton
+    from gsik.anim.retarget import widened
+
+    biped = load_skeleton("biped")
+    wide = widened(biped, 0.5)
+    hinge = [biped.dof_index(n) for n in ("left_knee.x", "right_elbow.x")]
+    ball = [biped.dof_index(n) for n in ("waist.x", "left_hip.z", "neck.y", "right_ankle.x")]
+    np.testing.assert_array_equal(wide.lower[hinge], biped.lower[hinge])
+    np.testing.assert_allclose(wide.upper[ball] - biped.upper[ball], 0.5)
+    t = build(UNITY)
+    motion = np.zeros((8, t.clip.motion.shape[1]))
+    motion[:, :3] = t.rig.rest_positions[0]
+    spine = [k for k, j in enumerate(t.clip.joints) if j.name == "Spine"][0]
+    column = sum(len(j.channels) for j in t.clip.joints[:spine]) + 2  # Spine's Xrotation (ZYX): bend forward
+    motion[:, column] = np.linspace(0.0, 75.0, 8)  # degrees: past the biped's waist range
+    clip = clip_of(t.rig, motion)
+    tight = Retargeter(biped, clip).retarget(clip)
+    loose = Retargeter(biped, clip, limit_margin=np.radians(30.0)).retarget(clip)
+    assert loose.errors.max() < 0.005 < tight.errors.max()
