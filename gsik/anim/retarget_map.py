@@ -23,7 +23,7 @@ from pathlib import Path
 
 from gsik.errors import RetargetError, choices
 from gsik.io.files import read_text
-from gsik.io.yaml_safe import load_yaml
+from gsik.io.yaml_safe import MAX_BYTES, load_yaml
 
 #: Aliases (normalised) of the biped's frames without a side.
 CENTRE_ALIASES = {
@@ -78,7 +78,7 @@ def guess_mapping(clip_names: Sequence[str], frame_names: Sequence[str]) -> dict
 def read_mapping(path: str | Path) -> dict[str, str]:
     """A mapping file's ``map`` (biped frame -> clip joint); see the module docstring."""
     # The one bounded reader every other format uses: size, depth and alias expansion limited, lines named.
-    data = load_yaml(read_text(path, "mapping file"), str(path), RetargetError).data
+    data = load_yaml(read_text(path, "mapping file", limit=MAX_BYTES), str(path), RetargetError).data
     if not isinstance(data, dict) or not isinstance(data.get("map"), dict):
         raise RetargetError(f"{path}: a mapping file needs a 'map:' of biped frame: clip joint, got {data!r:.80}")
     return {str(k): str(v) for k, v in data["map"].items()}
