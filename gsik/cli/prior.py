@@ -13,7 +13,7 @@ from gsik.cli.progress import progress_for
 from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import write_motion_bvh
 from gsik.prior import fit_prior, write_prior
-from gsik.prior_mixture import fit_mixture, write_mixture
+from gsik.prior_mixture import MAX_COMPONENTS, fit_mixture, write_mixture
 
 
 def add_commands(add, common) -> None:
@@ -36,7 +36,7 @@ def add_commands(add, common) -> None:
             "cross-validation over time segments of the clip.")
     _clip_options(p)
     p.add_argument("--out", metavar="PRIOR.npz", required=True, help="the pose prior file to write")
-    p.add_argument("--frames", type=int, help="use only the clip's first N frames")
+    p.add_argument("--frames", type=_frame_count, help="use only the clip's first N frames (N >= 1)")
     p.add_argument("--source", default="", help="what the clip is and its licence, kept in the file")
     p.add_argument("--components", type=_components, metavar="K|auto",
                    help="learn a mixture of K Gaussians (gsik.prior_mixture; 'auto': K chosen by cross-validation "
@@ -53,9 +53,20 @@ def _components(text: str) -> int | str:
         k = int(text)
     except ValueError:
         k = 0
-    if k < 1:
-        raise argparse.ArgumentTypeError(f"must be a count >= 1 or 'auto', got {text!r}")
+    if not 1 <= k <= MAX_COMPONENTS:
+        raise argparse.ArgumentTypeError(f"must be a count from 1 to {MAX_COMPONENTS} or 'auto', got {text!r}")
     return k
+
+
+def _frame_count(text: str) -> int:
+    """``--frames``: a count >= 1 (a negative count would silently drop frames from the end)."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}")
+    return n
 
 
 def _clip_options(p: argparse.ArgumentParser) -> None:

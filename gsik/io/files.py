@@ -49,12 +49,11 @@ def read_bounded(path: str | os.PathLike, what: str = "file", limit: int = MAX_F
     try:
         _check_regular(os.stat(path), path, action, limit)
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
-    except OSError as exc:
-        raise file_error(action, path, exc) from exc
-    try:
         with os.fdopen(fd, "rb") as f:
-            _check_regular(os.fstat(f.fileno()), path, action, limit)
-            data = f.read(limit + 1)
+            size = _check_regular(os.fstat(f.fileno()), path, action, limit)
+            data = _read_at_most(f, size, limit)
+    except GsikFileError:
+        raise
     except OSError as exc:
         raise file_error(action, path, exc) from exc
     if len(data) > limit:
@@ -62,13 +61,32 @@ def read_bounded(path: str | os.PathLike, what: str = "file", limit: int = MAX_F
     return data
 
 
-def _check_regular(st: os.stat_result, path: str | os.PathLike, action: str, limit: int) -> None:
-    """Refuse what is not a regular file, or is larger than ``limit`` bytes."""
+#: Bytes read at a time past the size a file had when it was opened [bytes].
+_CHUNK = 1 << 20
+
+
+def _read_at_most(f, size: int, limit: int) -> bytes:
+    """The file's bytes, at most ``limit + 1`` of them: its ``size`` at open in one read (never a buffer of
+    ``limit`` bytes for a small file), then chunks while it grows."""
+    chunks, total, want = [], 0, size + 1
+    while total <= limit:
+        chunk = f.read(min(want, limit + 1 - total))
+        if not chunk:
+            break
+        chunks.append(chunk)
+        total += len(chunk)
+        want = _CHUNK
+    return chunks[0] if len(chunks) == 1 else b"".join(chunks)
+
+
+def _check_regular(st: os.stat_result, path: str | os.PathLike, action: str, limit: int) -> int:
+    """The size of a regular file of at most ``limit`` bytes; refuses anything else."""
     if not stat.S_ISREG(st.st_mode):
         raise GsikFileError(f"{action} {show_value(os.fspath(path), MAX_PATH_CHARS)}: not a regular file "
                             f"({_kind(st.st_mode)}); gsik reads only regular files")
     if st.st_size > limit:
         raise _too_large(action, path, f"{st.st_size:,}", limit)
+    return st.st_size
 
 
 def _too_large(action: str, path: str | os.PathLike, size: str, limit: int) -> GsikFileError:
@@ -148,7 +166,12 @@ STALE_TEMPORARY_AGE = 600.0
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Replace ``path`` with ``text`` (UTF-8) atomically.
+    """Replace ``path`` with ``text`` (UTF-8) atomically: :func:`atomic_write_bytes`."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+    """Replace ``path`` with ``data`` atomically; every file gsik writes goes through here.
 
     Writes a temporary file in the same directory, fsyncs it and renames it
     over ``path``; on any failure the temporary file is removed and an
@@ -171,7 +194,7 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     try:
         tmp, fd = _open_temporary(directory, base, target)
         with os.fdopen(fd, "wb") as f:
-            f.write(text.encode("utf-8"))
+            f.write(data)
             f.flush()
             os.fsync(f.fileno())
         if mode is not None:
