@@ -8,11 +8,12 @@ from typing import TextIO
 import gsik
 from gsik.anim.retarget import Retargeted, Retargeter
 from gsik.anim.retarget_map import read_mapping
-from gsik.cli.common import check_out
+from gsik.errors import RetargetError
+from gsik.cli.common import CommandError, check_out
 from gsik.cli.progress import progress_for
 from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import write_motion_bvh
-from gsik.prior import fit_prior, write_prior
+from gsik.prior import CV_SEGMENTS, fit_prior, write_prior
 from gsik.prior_mixture import MAX_COMPONENTS, fit_mixture, write_mixture
 
 
@@ -80,10 +81,24 @@ def _retarget(args: argparse.Namespace, frames: int | None = None) -> Retargeted
     clip = read_bvh(args.clip)
     if frames:
         clip = type(clip)(clip.joints, clip.frame_time, clip.motion[:frames])
+    if hasattr(args, "components"):
+        _check_learnable(args, clip.n_frames)
     mapping = read_mapping(args.map) if args.map else None
-    rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up)
-    with progress_for(args, "retarget") as bar:
-        return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
+    try:
+        rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up)
+        with progress_for(args, "retarget") as bar:
+            return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
+    except RetargetError as exc:  # name the clip: the retargeter only knows its joints
+        raise RetargetError(f"{args.clip}: {exc}") from None
+
+
+def _check_learnable(args: argparse.Namespace, n_frames: int) -> None:
+    """Before the retarget: enough frames to learn from, and to fit ``--components``."""
+    if n_frames < 2 * CV_SEGMENTS:
+        raise CommandError(f"{args.clip}: {n_frames} frames; learning a prior needs at least {2 * CV_SEGMENTS}")
+    if isinstance(args.components, int) and args.components > n_frames // 2:
+        raise CommandError(f"--components {args.components}: {n_frames} frames fit at most {n_frames // 2} "
+                           "components")
 
 
 def _report(r: Retargeted, out: TextIO) -> None:
