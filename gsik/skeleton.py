@@ -31,7 +31,7 @@ from functools import cached_property
 import numpy as np
 
 from gsik.balance import MassModel, mass_model
-from gsik.errors import SkeletonError, choices
+from gsik.errors import SkeletonError, choices, show_value
 # The raw specs live with their builder; they are part of this module's API.
 from gsik.skeleton_builder import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, SkeletonBuilder
 
@@ -231,7 +231,10 @@ class Skeleton:
 
     def validate_q(self, q) -> np.ndarray:
         """``q`` as a float array (n_dofs,), or :class:`SkeletonError` naming the problem."""
-        a = np.asarray(q, dtype=float)
+        try:
+            a = np.asarray(q, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            raise SkeletonError(f"joint angles must be numbers, got {show_value(q)}") from None
         if a.shape != (self.n_dofs,):
             raise SkeletonError(f"joint angles must have shape ({self.n_dofs},), got {a.shape}")
         if not np.all(np.isfinite(a)):

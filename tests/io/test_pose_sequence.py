@@ -113,14 +113,20 @@ def test_errors_name_the_file_line_field_and_value(skeleton, everything, old, ne
         pose_from_yaml(text, skeleton, "bad.yaml")
 
 
-def test_a_clip_transform_that_is_not_a_rotation_is_refused(skeleton, everything):
+def test_a_clip_transform_that_is_not_a_rotation_is_refused_on_read_and_never_written(skeleton, everything):
     m = everything["clip"].motion
     W = m.world_from_root.copy()
     W[2, :3, :3] *= 1.001
     bad = Clip("c", Motion(skeleton, m.q, m.roots, W, m.frame_time))
-    with pytest.raises(gsik.PoseError, match=r"bad.yaml:\d+: clip.frames.2.world_from_root: the first three columns "
-                                             r"must be a rotation \(orthonormal within 1e-06, determinant \+1\)"):
-        pose_from_yaml(pose_to_yaml(_pose(skeleton, 0), clip=bad), skeleton, "bad.yaml")
+    refusal = (r":\d+: clip.frames.2.world_from_root: the first three columns must be a rotation \(orthonormal "
+               r"within 1e-06, determinant \+1\)")
+    with pytest.raises(gsik.PoseError, match=r"gsik would not read this pose file back \(the pose file" + refusal):
+        pose_to_yaml(_pose(skeleton, 0), clip=bad)
+    lines = pose_to_yaml(_pose(skeleton, 0), clip=everything["clip"]).splitlines()
+    k = [i for i, line in enumerate(lines) if "world_from_root:" in line][2]  # frame 2's
+    lines[k] = "      world_from_root: [[1.5, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]"
+    with pytest.raises(gsik.PoseError, match="bad.yaml" + refusal):
+        pose_from_yaml("\n".join(lines) + "\n", skeleton, "bad.yaml")
 
 
 def test_an_empty_clip_is_refused(skeleton, everything):

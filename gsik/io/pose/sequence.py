@@ -93,7 +93,7 @@ def read_clip(r: _Reader, value, skeleton: Skeleton) -> Clip:
         here = at + ("frames", i)
         f = r.mapping(frame, here, _CLIP_FRAME_KEYS)
         root = r.name(f["root"], here + ("root",))
-        if root not in skeleton.frame_names:
+        if root not in skeleton.joint_names and root not in skeleton.site_names:
             r.fail(here + ("root",), f"unknown root {show_value(root)}; valid: any joint or site, "
                                      f"{choices(skeleton.joint_names + skeleton.site_names)}")
         roots.append(root)
