@@ -173,7 +173,7 @@ def test_a_key_sequence_keeps_its_fps_and_length(doc, tmp_path):
 @pytest.mark.parametrize("old, new, message", [
     ("  left_knee:", "  hips:", "pole target on 'hips': the studio has pole targets on"),
     ("    - frame: 15", "    - frame: 0", "keys.poses.1.frame: a second key at frame 0"),
-    ("  fps: 30.0", "  fps: -3.0", "keys.fps: must be above 0"),
+    ("  fps: 30.0", "  fps: -3.0", "keys.fps: must be from 0.001 to 1000 frames per second"),
 ])
 def test_a_bad_file_changes_nothing(doc, tmp_path, old, new, message):
     _everything(doc)

@@ -8,6 +8,7 @@ with a :class:`~gsik.errors.BvhError` naming the bound, the file's value and the
 
 from __future__ import annotations
 
+from gsik.anim.motion import FRAME_TIME_RANGE
 from gsik.errors import BvhError
 
 #: Largest BVH file read [bytes].
@@ -63,3 +64,12 @@ def check_braces(text: str, source: str) -> None:
     line = text.count("\n", 0, at) + 1
     raise BvhError(f"too many joints: more than {MAX_BVH_JOINTS:,} '{{' blocks (End Sites included); the limit is "
                    f"{MAX_BVH_JOINTS:,}", line=line, path=source)
+
+
+
+
+def check_frame_time(frame_time: float, source: str, line: int) -> None:
+    """Refuse a ``Frame Time`` outside :data:`FRAME_TIME_RANGE` (5e-324 s would overflow the frame rate)."""
+    if not FRAME_TIME_RANGE[0] <= frame_time <= FRAME_TIME_RANGE[1]:
+        raise BvhError(f"Frame Time {frame_time!r}: must be from {FRAME_TIME_RANGE[0]:g} to {FRAME_TIME_RANGE[1]:g} "
+                       "seconds", line=line, path=source)

@@ -12,7 +12,7 @@ import numpy as np
 
 from gsik.errors import BvhError, choices, show_value
 from gsik.io.bvh.clip import CHANNEL_LOOKUP, CHANNEL_NAMES, BvhClip, BvhJoint
-from gsik.io.bvh.limits import MAX_BVH_BYTES, check_braces, check_frames, check_joints
+from gsik.io.bvh.limits import MAX_BVH_BYTES, check_braces, check_frame_time, check_frames, check_joints
 from gsik.io.files import read_text
 from gsik.io.names import unique_name
 
@@ -344,6 +344,7 @@ def _parse_motion_header(lines: list[str], motion_at: int, source: str) -> tuple
     frame_time = _number(m.group(1), i + 1, "Frame Time", source)
     if frame_time <= 0.0:
         raise BvhError(f"Frame Time must be positive, found {m.group(1)!r}", line=i + 1, path=source)
+    check_frame_time(frame_time, source, i + 1)
     return n_frames, frame_time, i + 1
 
 

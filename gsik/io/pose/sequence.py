@@ -13,10 +13,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gsik.anim.motion import Motion
+from gsik.anim.motion import FRAME_TIME_RANGE, Motion
 from gsik.errors import choices, show_value
 from gsik.io.pose.model import (_CLIP_FRAME_KEYS, _CLIP_KEY, _CLIP_KEYS, _KEY_SEQUENCE_KEYS, _KEYS_KEY, _POLE_KEYS,
-                               _POLES_KEY, _POSE_KEYS, MAX_FPS, Clip, KeySequence, Pole, Pose)
+                               _POLES_KEY, _POSE_KEYS, MAX_FPS, MIN_FPS, Clip, KeySequence, Pole, Pose)
 from gsik.io.yaml_safe import yaml_string
 from gsik.rotations import ROTATION_TOLERANCE
 from gsik.skeleton import Skeleton
@@ -40,8 +40,8 @@ def read_keys(r: _Reader, value, pose_at: Callable[[dict, tuple], Pose]) -> KeyS
     at = (_KEYS_KEY,)
     seq = r.mapping(value, at, _KEY_SEQUENCE_KEYS[2:], _KEY_SEQUENCE_KEYS[:2])
     fps = r.number(seq.get("fps", DEFAULT_FPS), at + ("fps",))
-    if not 0.0 < fps <= MAX_FPS:
-        r.fail(at + ("fps",), f"must be above 0 and at most {MAX_FPS:g} frames per second, got {fps!r}")
+    if not MIN_FPS <= fps <= MAX_FPS:
+        r.fail(at + ("fps",), f"must be from {MIN_FPS:g} to {MAX_FPS:g} frames per second, got {fps!r}")
     keys: dict[int, Pose] = {}
     for i, entry in enumerate(r.items(seq["poses"], at + ("poses",), "keyed poses")):
         here = at + ("poses", i)
@@ -79,8 +79,9 @@ def read_clip(r: _Reader, value, skeleton: Skeleton) -> Clip:
     c = r.mapping(value, at, _CLIP_KEYS)
     name = r.name(c["name"], at + ("name",))
     frame_time = r.number(c["frame_time"], at + ("frame_time",))
-    if not frame_time > 0.0:
-        r.fail(at + ("frame_time",), f"must be above 0 seconds, got {frame_time!r}")
+    if not FRAME_TIME_RANGE[0] <= frame_time <= FRAME_TIME_RANGE[1]:
+        r.fail(at + ("frame_time",), f"must be from {FRAME_TIME_RANGE[0]:g} to {FRAME_TIME_RANGE[1]:g} seconds, got "
+                                     f"{frame_time!r}")
     dofs = r.items(c["dofs"], at + ("dofs",), "DOF names")
     if tuple(dofs) != skeleton.dof_names:
         r.fail(at + ("dofs",), f"must list the skeleton's {skeleton.n_dofs} DOFs in its order: "
