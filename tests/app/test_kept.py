@@ -203,7 +203,7 @@ def test_new_clears_keys_clip_and_poles(doc):
 @pytest.mark.parametrize("frame", [-1, 10**12, 2.5, float("nan"), "3", True])
 def test_a_key_at_a_frame_no_file_could_keep_is_refused_and_changes_nothing(doc, frame):
     doc.timeline.add_key(0)
-    with pytest.raises(gsik.GsikError, match="a key's frame must be a whole number >= 0 and <= 99999"):
+    with pytest.raises(gsik.GsikError, match="a key's frame must be a whole number >= 0 and <= 9999"):
         doc.timeline.add_key(frame)
     with pytest.raises(gsik.GsikError, match="a key's frame must be a whole number"):
         doc.timeline.move_key(0, frame)
