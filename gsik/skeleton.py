@@ -33,7 +33,7 @@ import numpy as np
 from gsik.balance import MassModel, mass_model
 from gsik.errors import SkeletonError, choices, show_value
 # The raw specs live with their builder; they are part of this module's API.
-from gsik.skeleton_builder import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, SkeletonBuilder
+from gsik.skeleton_builder import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, SkeletonBuilder, check_reach
 
 
 @dataclass(frozen=True, eq=False)
@@ -260,7 +260,8 @@ def build_skeleton(
             with ``lower > upper``, non-finite numbers, zero axes, unknown
             effectors, segment ends or root, negative masses, segments with
             mass that span a moving joint, soles without area, and skeletons beyond
-            :data:`~gsik.skeleton_builder.MAX_DOFS` or :data:`~gsik.skeleton_builder.MAX_FRAMES`.
+            :data:`~gsik.skeleton_builder.MAX_DOFS` or :data:`~gsik.skeleton_builder.MAX_FRAMES`, or longer than
+            :data:`~gsik.skeleton_builder.MAX_REACH`.
     """
     b = SkeletonBuilder(source)
     b.index_joints(joints)
@@ -273,7 +274,9 @@ def build_skeleton(
     b.add_segments(segments)
     b.set_effectors(effectors)
     b.set_root(root)
-    skeleton = Skeleton(**b.arrays(name))
+    arrays = b.arrays(name)
+    check_reach(arrays["frame_offset"], source)
+    skeleton = Skeleton(**arrays)
     if skeleton.total_mass > 0.0:
         skeleton.mass_model  # every segment with a mass must be fixed in one frame: checked here, once
     return skeleton
