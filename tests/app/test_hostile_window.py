@@ -8,23 +8,14 @@ import pytest
 
 pytestmark = pytest.mark.gui
 
-_CHAIN = """HIERARCHY
-ROOT hips
-{
-  OFFSET 0 0 0
-  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
-  JOINT chest
-  {
-    OFFSET 0 10 0
-    CHANNELS 3 Zrotation Xrotation Yrotation
-    End Site
-    {
-      OFFSET 0 10 0
-    }
-  }
-}
-MOTION
-"""
+DATA = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
+
+
+def _walk_with(motion: str) -> str:
+    """tests/data/walk_zxy.bvh (12 joints, 39 channels) with its MOTION section replaced by ``motion``."""
+    with open(os.path.join(DATA, "walk_zxy.bvh"), encoding="utf-8") as f:
+        return f.read().split("MOTION")[0] + "MOTION\n" + motion
+
 
 _STILL = """name: still
 joints:
@@ -55,8 +46,8 @@ def _long_keys(pose) -> str:
 def _hostile_files(tmp_path, pose) -> dict[str, tuple[str, str, str]]:
     """name -> (the File menu action, its path, what the refusal says)."""
     files = {
-        "frames0.bvh": ("import_clip", _CHAIN + "Frames: 0\nFrame Time: 0.0333\n", "no frames"),
-        "frame_time.bvh": ("import_clip", _CHAIN + "Frames: 1\nFrame Time: 5e-324\n" + "0 " * 9 + "\n",
+        "frames0.bvh": ("import_clip", _walk_with("Frames: 0\nFrame Time: 0.0333\n"), "no frames"),
+        "frame_time.bvh": ("import_clip", _walk_with("Frames: 1\nFrame Time: 5e-324\n" + "0 " * 39 + "\n"),
                            "Frame Time 5e-324: must be from 0.0001 to 1000 seconds"),
         "still.yaml": ("import_skeleton", _STILL, "no degrees of freedom"),
         "far.yaml": ("import_skeleton", _FAR, "a skeleton may reach at most 100000 m"),
