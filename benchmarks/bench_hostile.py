@@ -45,6 +45,17 @@ print(json.dumps(dict(wall=wall, cpu=cpu, growth_mb=growth, traced_mb=peak, refu
 """
 
 
+def issue_cases(folder: Path) -> list[hostile.Case]:
+    """The issue's own sizes (tens of MB on disk): written here, not in the tests."""
+    files = {"star_1M.bvh": ("bvh", hostile._star(1_000_000)), "deep_100k.bvh": ("bvh", hostile._deep(100_000)),
+             "chain_100k.urdf": ("urdf", hostile._urdf_chain(100_000))}
+    out = []
+    for name, (reader, text) in files.items():
+        (folder / name).write_text(text)
+        out.append(hostile.Case(name, reader, str(folder / name), "the limit is"))
+    return out
+
+
 def measure(case: hostile.Case) -> dict:
     """One case's figures, from a fresh interpreter."""
     code = _MEASURE.format(fuzz=str(ROOT / "tests" / "fuzz"))
@@ -59,11 +70,14 @@ def measure(case: hostile.Case) -> dict:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--only", default="", help="run only the cases whose name holds this text")
+    parser.add_argument("--issue-sizes", action="store_true", help="also the issue's full-size files: a 42 MB "
+                        "BVH star of 1,000,000 joints, a BVH and a URDF 100,000 deep")
     args = parser.parse_args()
     failed = 0
     worst = dict(wall=0.0, cpu=0.0, growth_mb=0.0, traced_mb=0.0)
     with tempfile.TemporaryDirectory() as folder:
-        cases = [c for c in hostile.make_cases(folder) if args.only in c.name]
+        cases = hostile.make_cases(folder) + (issue_cases(Path(folder)) if args.issue_sizes else [])
+        cases = [c for c in cases if args.only in c.name]
         print(f"{'case':34} {'reader':9} {'wall s':>7} {'cpu s':>7} {'RSS +MB':>8} {'traced MB':>9}  refusal")
         for case in cases:
             f = measure(case)
