@@ -33,7 +33,7 @@ def read_clip(path: str | os.PathLike) -> BvhImport:
         GsikFileError, BvhError: the file cannot be read or is not valid BVH.
     """
     name = os.path.splitext(os.path.basename(os.fspath(path)))[0] or "bvh"
-    imported = import_bvh(read_bvh(path), name=name)
+    imported = import_bvh(read_bvh(path), name=name, source=os.fspath(path))
     check_playable(imported.motion, os.fspath(path))
     return imported
 

@@ -56,7 +56,7 @@ def _track(args: argparse.Namespace, path: str, out_path: str | None, progress=N
     from gsik.anim.tracking import track_clip
 
     clip = read_bvh(path)
-    imported = import_bvh(clip, strip_namespace=args.strip_namespace, up=args.file_up,
+    imported = import_bvh(clip, strip_namespace=args.strip_namespace, up=args.file_up, source=path,
                           **({"scale": args.scale} if args.scale else {}))
     targets, position_only, priorities = _targets(args)
     options = dict(settings_overrides(args))
