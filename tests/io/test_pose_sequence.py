@@ -114,19 +114,31 @@ def test_errors_name_the_file_line_field_and_value(skeleton, everything, old, ne
         pose_from_yaml(text, skeleton, "bad.yaml")
 
 
-def test_a_clip_transform_that_is_not_a_rotation_is_refused_on_read_and_never_written(skeleton, everything):
+_ROTATION = r"the first three columns must be a rotation \(orthonormal within 1e-06, determinant \+1\)"
+
+
+@pytest.mark.parametrize("field, line, message", [
+    ("world_from_root", "      world_from_root: [[1.5, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]",
+     _ROTATION),
+    ("world_from_root", "      world_from_root: [[1.0, 0.0, 0.0, 2.0e+6], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]",
+     r"must .*within 1e\+06 m of the origin"),
+    ("root", "    - root: waist.x", r"unknown root 'waist.x'; valid: any joint or site"),
+])
+def test_a_clip_frame_the_reader_refuses_is_never_written(skeleton, everything, field, line, message):
     m = everything["clip"].motion
-    W = m.world_from_root.copy()
-    W[2, :3, :3] *= 1.001
-    bad = Clip("c", Motion(skeleton, m.q, m.roots, W, m.frame_time))
-    refusal = (r":\d+: clip.frames.2.world_from_root: the first three columns must be a rotation \(orthonormal "
-               r"within 1e-06, determinant \+1\)")
-    with pytest.raises(gsik.PoseError, match=r"gsik would not read this pose file back \(the pose file" + refusal):
+    W, roots = m.world_from_root.copy(), list(m.roots)
+    if field == "root":
+        roots[2] = "waist.x"  # a rotation's frame: Motion takes it, a pose file does not
+    else:
+        W[2, :3] = [[float(v) for v in row.split(", ")] for row in line.split("[[")[1].split("]]")[0].split("], [")]
+    bad = Clip("c", Motion(skeleton, m.q, tuple(roots), W, m.frame_time))
+    with pytest.raises(gsik.PoseError, match=rf"gsik would not read this pose file back \(clip.frames.2.{field}: "
+                                             + message):
         pose_to_yaml(_pose(skeleton, 0), clip=bad)
     lines = pose_to_yaml(_pose(skeleton, 0), clip=everything["clip"]).splitlines()
-    k = [i for i, line in enumerate(lines) if "world_from_root:" in line][2]  # frame 2's
-    lines[k] = "      world_from_root: [[1.5, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]"
-    with pytest.raises(gsik.PoseError, match="bad.yaml" + refusal):
+    k = [i for i, text in enumerate(lines) if text.strip().startswith(("- root:", "world_from_root:")[field != "root"])]
+    lines[k[2]] = line  # frame 2's
+    with pytest.raises(gsik.PoseError, match=rf"bad.yaml:\d+: clip.frames.2.{field}: " + message):
         pose_from_yaml("\n".join(lines) + "\n", skeleton, "bad.yaml")
 
 

@@ -14,12 +14,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gsik.anim.motion import FRAME_TIME_RANGE, Motion
-from gsik.errors import choices, show_value
+from gsik.errors import PoseError, choices, show_value
 from gsik.io.pose.model import (_CLIP_FRAME_KEYS, _CLIP_KEY, _CLIP_KEYS, _KEY_SEQUENCE_KEYS, _KEYS_KEY, _POLE_KEYS,
                                _POLES_KEY, _POSE_KEYS, MAX_FPS, MIN_FPS, Clip, KeySequence, Pole, Pose)
 from gsik.io.yaml_safe import yaml_string
 from gsik.rotations import ROTATION_TOLERANCE
 from gsik.skeleton import Skeleton
+from gsik.targets import MAX_COORDINATE
 
 if TYPE_CHECKING:
     from gsik.io.pose.read import _Reader
@@ -102,6 +103,31 @@ def read_clip(r: _Reader, value, skeleton: Skeleton) -> Clip:
         W[i] = _read_transform(r, f["world_from_root"], here + ("world_from_root",))
         q[i] = r.vector(f["angles"], skeleton.n_dofs, here + ("angles",))
     return Clip(name, Motion(skeleton, q, tuple(roots), W, frame_time))
+
+
+def check_clip_frames(motion: Motion, skeleton: Skeleton) -> None:
+    """PoseError for the first frame of ``motion`` that :func:`read_clip` would refuse for ``skeleton`` (its root
+    not a joint or site, a non-finite number, a root placed beyond ``MAX_COORDINATE``, a transform that is not a
+    rotation), checked over all frames at once, in the reader's words."""
+    valid = set(skeleton.joint_names) | set(skeleton.site_names)
+    W, R = motion.world_from_root, motion.world_from_root[:, :3, :3]
+    with np.errstate(all="ignore"):
+        bad_root = np.array([r not in valid for r in motion.roots])
+        finite = np.isfinite(W[:, :3]).all(axis=(1, 2)) & np.isfinite(motion.q).all(axis=1)
+        far = np.abs(W[:, :3, 3]).max(axis=1) > MAX_COORDINATE
+        skew = np.abs(np.transpose(R, (0, 2, 1)) @ R - np.eye(3)).max(axis=(1, 2)) > ROTATION_TOLERANCE
+        not_rotation = skew | (np.linalg.det(R) < 0.0)
+    problems = [(bad_root, "root", lambda k: f"unknown root {show_value(motion.roots[k])}; valid: any joint or "
+                                             f"site, {choices(skeleton.joint_names + skeleton.site_names)}"),
+                (~finite, "", lambda k: "holds a number that is not finite"),
+                (finite & far, "world_from_root", lambda k: f"must place the root within {MAX_COORDINATE:g} m of "
+                                                            f"the origin, got {W[k, :3, 3].tolist()}"),
+                (finite & not_rotation, "world_from_root", lambda k: "the first three columns must be a rotation "
+                 f"(orthonormal within {ROTATION_TOLERANCE:g}, determinant +1), got {R[k].tolist()}")]
+    for mask, field, text in problems:
+        if mask.any():
+            k = int(np.argmax(mask))
+            raise PoseError(f"{'.'.join(filter(None, (_CLIP_KEY, 'frames', str(k), field)))}: {text(k)}")
 
 
 def _read_transform(r: _Reader, value, path: tuple) -> np.ndarray:

@@ -8,7 +8,8 @@ from collections.abc import Mapping, Sequence
 from gsik.errors import PoseError
 from gsik.io.files import atomic_write_text
 from gsik.io.pose.model import _LIBRARY_KEY, POSE_FORMAT, Clip, KeySequence, Pole, Pose
-from gsik.io.pose.sequence import clip_lines, keys_lines, num as _num, num_list as _list, poles_lines
+from gsik.anim.motion import Motion
+from gsik.io.pose.sequence import check_clip_frames, clip_lines, keys_lines, num as _num, num_list as _list, poles_lines
 from gsik.io.yaml_safe import MAX_CHARS, MAX_VALUES, load_yaml, yaml_string
 from gsik.skeleton import Skeleton
 
@@ -69,22 +70,28 @@ def pose_to_yaml(pose: Pose, library: Sequence[tuple[str, Pose]] = (), keys: Key
     if keys is not None:
         out += keys_lines(keys, _pose_lines)
     out += poles_lines(poles or {})
-    if clip is not None:
-        out += clip_lines(clip)
-    text = "\n".join(out) + "\n"
+    text = "\n".join(out + (clip_lines(clip) if clip is not None else [])) + "\n"
     _check_readable(text, clip)
     skeleton = skeleton if skeleton is not None else clip.motion.skeleton if clip is not None else None
     if skeleton is not None:
-        _check_round_trip(text, skeleton)
+        _check_round_trip(out, clip, skeleton)
     return text
 
 
-def _check_round_trip(text: str, skeleton: Skeleton) -> None:
-    """PoseError unless :func:`gsik.io.pose.pose_from_yaml` reads ``text`` for ``skeleton``."""
+def _check_round_trip(lines: list[str], clip: Clip | None, skeleton: Skeleton) -> None:
+    """PoseError unless :func:`gsik.io.pose.pose_from_yaml` reads the file for ``skeleton``: every block but the
+    clip's frames read back as written (``lines``), the clip with its first frame only, and every frame's values
+    checked as the reader checks them (:func:`gsik.io.pose.sequence.check_clip_frames`), in one pass over arrays:
+    reading a long clip back would take seconds."""
     from gsik.io.pose.read import pose_from_yaml  # read imports this module's neighbours: late, to avoid a cycle
 
     try:
-        pose_from_yaml(text, skeleton, "the pose file")
+        if clip is not None:
+            check_clip_frames(clip.motion, skeleton)
+            m = clip.motion
+            first = Clip(clip.name, Motion(m.skeleton, m.q[:1], m.roots[:1], m.world_from_root[:1], m.frame_time))
+            lines = lines + clip_lines(first)
+        pose_from_yaml("\n".join(lines) + "\n", skeleton, "the pose file")
     except PoseError as exc:
         raise PoseError(f"gsik would not read this pose file back ({exc}); nothing was written") from None
 
