@@ -69,3 +69,24 @@ def test_the_bounded_opener_reads_at_most_the_limit_and_only_regular_files(tmp_p
         read_bounded(tmp_path, "test file")
     with pytest.raises(gsik.GsikFileError, match="No such file"):
         read_bounded(tmp_path / "missing", "test file")
+
+
+def test_mangled_prior_archives_are_read_or_refused_with_a_gsik_error(tmp_path):
+    import random
+
+    from hostile import _zip, prior_members
+    valid = _zip(prior_members())
+    rng = random.Random(2024)
+    path = tmp_path / "p.npz"
+    outcomes = {"read": 0, "refused": 0}
+    for _ in range(300):
+        data = bytearray(valid)
+        for _ in range(rng.randint(1, 8)):
+            data[rng.randrange(len(data))] = rng.randrange(256)
+        if rng.random() < 0.2:
+            data = data[: rng.randrange(len(data))]
+        path.write_bytes(bytes(data))
+        exc = refusal("prior", str(path))
+        assert exc is None or isinstance(exc, gsik.GsikError), repr(exc)
+        outcomes["read" if exc is None else "refused"] += 1
+    assert outcomes["refused"] > 100  # the mutations reach the checks
