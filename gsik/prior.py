@@ -212,8 +212,13 @@ def _check_metadata(data: dict[str, np.ndarray], path) -> None:
         raise PriorError(f"{path}: n_frames must be >= 0, got {int(data['n_frames'])}")
     if not 0.0 <= float(data["shrinkage"]) <= 1.0:
         raise PriorError(f"{path}: shrinkage must be in [0, 1], got {float(data['shrinkage'])!r}")
-    if len(data["dof_names"]) > MAX_PRIOR_DOFS:
-        raise PriorError(f"{path}: {len(data['dof_names']):,} DOF names; the limit is {MAX_PRIOR_DOFS:,}")
+    n = len(data["dof_names"])
+    if n > MAX_PRIOR_DOFS:
+        raise PriorError(f"{path}: {n:,} DOF names; the limit is {MAX_PRIOR_DOFS:,}")
+    for key in ("mean", "covariance", "means", "covariances"):
+        square = key.startswith("cov")
+        if key in data and (data[key].shape[-1] != n or (square and data[key].shape[-2] != n)):
+            raise PriorError(f"{path}: {key} has shape {data[key].shape} for {n} DOF names")
 
 
 def bundled_prior_path(skeleton: str = "biped") -> Path:

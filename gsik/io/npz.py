@@ -35,7 +35,7 @@ from gsik.io.files import MAX_PATH_CHARS, read_bounded
 MAX_NPZ_BYTES = 64 * 1024 * 1024
 
 #: Most bytes all members may inflate to, together [bytes].
-MAX_NPZ_UNCOMPRESSED = 128 * 1024 * 1024
+MAX_NPZ_UNCOMPRESSED = 64 * 1024 * 1024
 
 #: Most members an archive may list (whether or not the reader expects them).
 MAX_MEMBERS = 64

@@ -178,6 +178,7 @@ def npz_cases(folder: Path) -> list[Case]:
         "format_1.9.npz": (_zip(prior_members(format=1.9)), "member 'format.npy': holds '<f8' values"),
         "format_vector.npz": (_zip(prior_members(format=[1, 1])), "member 'format.npy': has shape (2,)"),
         "n_frames_words.npz": (_zip(prior_members(n_frames="ten")), "member 'n_frames.npy': holds '<U3'"),
+        "covariance_4x4.npz": (_zip(prior_members(covariance=np.eye(4))), "covariance has shape (4, 4) for 3 DOF"),
         "shrinkage_nan.npz": (_zip(prior_members(shrinkage=np.nan)), "shrinkage must be in [0, 1], got nan"),
         "bzip2.npz": (_zip(prior_members(), zipfile.ZIP_BZIP2), "compressed with method 12"),
         "plain.npy": (_npy(np.zeros(3)), "not a .npz (zip) archive"),
