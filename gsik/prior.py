@@ -32,8 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from gsik.errors import GsikFileError, PriorError, choices
+from gsik.errors import PriorError, choices
+from gsik.io.files import atomic_write_bytes
+from gsik.io.npz import Member, npz_bytes, read_npz_members
 from gsik.skeleton import Skeleton
+from gsik.skeleton_builder import MAX_DOFS
 
 #: Smallest variance of any angle [rad^2] ((0.02 rad)^2, about 1 degree).
 VARIANCE_FLOOR = 4e-4
@@ -169,30 +172,53 @@ def read_prior(path: str | os.PathLike) -> PosePrior:
 
 
 def write_npz(path: str | os.PathLike, what: str, **arrays) -> None:
-    """Write ``arrays`` (names to arrays or scalars) as an ``.npz`` file; ``what`` names it in errors."""
-    try:
-        with open(path, "wb") as f:
-            np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()})
-    except OSError as e:
-        raise GsikFileError(f"cannot write {what} {path}: {e.strerror}") from None
+    """Write ``arrays`` (names to arrays or scalars) as an ``.npz`` file, atomically
+    (:func:`gsik.io.files.atomic_write_bytes`: an existing file is replaced whole or left untouched); ``what``
+    names it in errors."""
+    del what  # the atomic writer names the path
+    atomic_write_bytes(path, npz_bytes(arrays))
+
+
+#: What each member of a prior file may hold: dtype kinds and number of dimensions.
+MEMBERS = {"format": Member("iu", 0), "skeleton": Member("U", 0), "source": Member("U", 0),
+           "dof_names": Member("U", 1), "n_frames": Member("iu", 0), "shrinkage": Member("fiu", 0),
+           "mean": Member("fiu", 1), "covariance": Member("fiu", 2), "weights": Member("fiu", 1),
+           "means": Member("fiu", 2), "covariances": Member("fiu", 3)}
+
+#: Most DOFs a prior may cover (as many as a skeleton may have).
+MAX_PRIOR_DOFS = MAX_DOFS
 
 
 def read_npz(path: str | os.PathLike, what: str, format: int, needed: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """The arrays of an ``.npz`` file of ``format`` holding ``needed`` (no pickle); :class:`PriorError` otherwise."""
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except OSError as e:
-        raise GsikFileError(f"cannot read {what} {path}: {e.strerror or e}") from None
-    except ValueError as e:
-        raise PriorError(f"{path}: not a {what} file: {e}") from None
+    """The arrays of an ``.npz`` file of ``format`` holding exactly ``needed`` and ``format`` (no pickle; bounded:
+    :func:`gsik.io.npz.read_npz_members`), the metadata checked; :class:`PriorError` otherwise."""
+    data = read_npz_members(path, what, MEMBERS, PriorError)
     if "format" in data and int(data["format"]) != format:
         raise PriorError(f"{path}: not a format-{format} {what} (format {int(data['format'])}; formats: "
                          f"{FORMAT} a Gaussian pose prior, 2 a pose mixture)")
     missing = [k for k in ("format",) + needed if k not in data]
     if missing:
         raise PriorError(f"{path}: not a format-{format} {what} (missing {choices(missing)})")
+    extra = [f"{k}.npy" for k in data if k not in needed and k != "format"]
+    if extra:
+        raise PriorError(f"{path}: unexpected member {choices(extra)} in a format-{format} {what}")
+    _check_metadata(data, path)
     return data
+
+
+def _check_metadata(data: dict[str, np.ndarray], path) -> None:
+    """``n_frames`` >= 0, ``shrinkage`` in [0, 1], at most :data:`MAX_PRIOR_DOFS` DOF names."""
+    if int(data["n_frames"]) < 0:
+        raise PriorError(f"{path}: n_frames must be >= 0, got {int(data['n_frames'])}")
+    if not 0.0 <= float(data["shrinkage"]) <= 1.0:
+        raise PriorError(f"{path}: shrinkage must be in [0, 1], got {float(data['shrinkage'])!r}")
+    n = len(data["dof_names"])
+    if n > MAX_PRIOR_DOFS:
+        raise PriorError(f"{path}: {n:,} DOF names; the limit is {MAX_PRIOR_DOFS:,}")
+    for key in ("mean", "covariance", "means", "covariances"):
+        square = key.startswith("cov")
+        if key in data and (data[key].shape[-1] != n or (square and data[key].shape[-2] != n)):
+            raise PriorError(f"{path}: {key} has shape {data[key].shape} for {n} DOF names")
 
 
 def bundled_prior_path(skeleton: str = "biped") -> Path:

@@ -42,6 +42,8 @@ WEIGHT_FLOOR = 1e-6
 #: Solves with a re-chosen component in :func:`solve_with_mixture` after the overall Gaussian's.
 MIXTURE_ROUNDS = 3
 FORMAT = 2
+#: Most components a mixture may have (fitted or read): each is one dense (n, n) covariance.
+MAX_COMPONENTS = 32
 
 
 @dataclass(frozen=True, eq=False)
@@ -202,9 +204,10 @@ def fit_mixture(Q: np.ndarray, skeleton, components: int | None = None, shrinkag
     ``shrinkage`` in [0, 1] (default: the single Gaussian's, :func:`gsik.prior.choose_shrinkage`).
     """
     Q, a = training_poses(Q, skeleton, shrinkage, "a pose mixture")
-    if components is not None and not (isinstance(components, int) and 1 <= components <= len(Q) // 2):
-        raise PriorError(f"components must be an integer in [1, {len(Q) // 2}] (or None: chosen by "
-                         f"cross-validation from {list(COMPONENT_GRID)}), got {components!r}")
+    if components is not None and not (isinstance(components, int) and 1 <= components <= MAX_COMPONENTS
+                                       and components <= len(Q) // 2):
+        raise PriorError(f"components must be an integer in [1, {min(len(Q) // 2, MAX_COMPONENTS)}] (or None: "
+                         f"chosen by cross-validation from {list(COMPONENT_GRID)}), got {components!r}")
     k = choose_components(Q, a)[0] if components is None else components
     w, m, c = em(Q, k, a)
     return PoseMixture(skeleton.name, tuple(skeleton.dof_names), w, m, c, len(Q), a, source)
@@ -221,6 +224,8 @@ def read_mixture(path: str | os.PathLike) -> PoseMixture:
     """Read a pose mixture written by :func:`write_mixture` (no pickle)."""
     d = read_npz(path, "pose mixture", FORMAT, ("skeleton", "dof_names", "weights", "means", "covariances",
                                                   "n_frames", "shrinkage", "source"))
+    if len(d["weights"]) > MAX_COMPONENTS:
+        raise PriorError(f"{path}: a mixture of {len(d['weights']):,} components; the limit is {MAX_COMPONENTS}")
     return PoseMixture(str(d["skeleton"]), tuple(str(s) for s in d["dof_names"]), d["weights"], d["means"],
                        d["covariances"], int(d["n_frames"]), float(d["shrinkage"]), str(d["source"]))
 

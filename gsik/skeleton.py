@@ -31,9 +31,9 @@ from functools import cached_property
 import numpy as np
 
 from gsik.balance import MassModel, mass_model
-from gsik.errors import SkeletonError, choices
+from gsik.errors import SkeletonError, choices, show_value
 # The raw specs live with their builder; they are part of this module's API.
-from gsik.skeleton_builder import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, SkeletonBuilder
+from gsik.skeleton_builder import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, SkeletonBuilder, check_reach
 
 
 @dataclass(frozen=True, eq=False)
@@ -231,7 +231,10 @@ class Skeleton:
 
     def validate_q(self, q) -> np.ndarray:
         """``q`` as a float array (n_dofs,), or :class:`SkeletonError` naming the problem."""
-        a = np.asarray(q, dtype=float)
+        try:
+            a = np.asarray(q, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            raise SkeletonError(f"joint angles must be numbers, got {show_value(q)}") from None
         if a.shape != (self.n_dofs,):
             raise SkeletonError(f"joint angles must have shape ({self.n_dofs},), got {a.shape}")
         if not np.all(np.isfinite(a)):
@@ -257,7 +260,8 @@ def build_skeleton(
             with ``lower > upper``, non-finite numbers, zero axes, unknown
             effectors, segment ends or root, negative masses, segments with
             mass that span a moving joint, soles without area, and skeletons beyond
-            :data:`~gsik.skeleton_builder.MAX_DOFS` or :data:`~gsik.skeleton_builder.MAX_FRAMES`.
+            :data:`~gsik.skeleton_builder.MAX_DOFS` or :data:`~gsik.skeleton_builder.MAX_FRAMES`, or longer than
+            :data:`~gsik.skeleton_builder.MAX_REACH`.
     """
     b = SkeletonBuilder(source)
     b.index_joints(joints)
@@ -270,7 +274,9 @@ def build_skeleton(
     b.add_segments(segments)
     b.set_effectors(effectors)
     b.set_root(root)
-    skeleton = Skeleton(**b.arrays(name))
+    arrays = b.arrays(name)
+    check_reach(arrays["frame_offset"], source)
+    skeleton = Skeleton(**arrays)
     if skeleton.total_mass > 0.0:
         skeleton.mass_model  # every segment with a mass must be fixed in one frame: checked here, once
     return skeleton

@@ -35,6 +35,20 @@ MAX_FRAMES = 8192
 MAX_NAME_CHARS = 256
 
 
+#: Longest a skeleton may be: the sum of its offsets' lengths [m]. No pose then puts a frame farther than this from
+#: the root, so every frame stays within :data:`gsik.targets.MAX_COORDINATE` of a root near the origin.
+MAX_REACH = 1e5
+
+
+def check_reach(frame_offset: np.ndarray, source: str) -> None:
+    """Refuse a skeleton whose offsets ``frame_offset`` (n_frames, 3) [m] add up to more than :data:`MAX_REACH`."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        reach = float(np.sum(np.linalg.norm(frame_offset, axis=1)))
+    if not reach <= MAX_REACH:
+        raise SkeletonError(f"{source}: the offsets add up to {reach:.6g} m; a skeleton may reach at most "
+                            f"{MAX_REACH:g} m")
+
+
 def check_size(n_dofs: int, n_frames: int, source: str) -> None:
     """Refuse a skeleton beyond :data:`MAX_DOFS` or :data:`MAX_FRAMES` with a :class:`SkeletonError`."""
     if n_dofs > MAX_DOFS:

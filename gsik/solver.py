@@ -31,6 +31,15 @@ from gsik.skeleton import Skeleton
 from gsik.settings import PAPER_METHOD, SolverSettings, setting_names
 from gsik.targets import MAX_COORDINATE, Target
 
+#: Largest posture weight (or precision entry) [1/rad^2]: a prior's precision is about 1e3; beyond 1e12 the step's
+#: system loses every digit of the targets to the posture.
+MAX_POSTURE_WEIGHT = 1e12
+
+#: Most enabled targets a solver takes at once (a tracked 100-joint clip uses about 200).
+MAX_TARGETS = 512
+#: Most distinct priority levels among them.
+MAX_PRIORITY_LEVELS = 16
+
 __all__ = ["PAPER_METHOD", "SolveResult", "Solver", "SolverSettings", "Status", "setting_names"]
 
 
@@ -250,6 +259,7 @@ class Solver(AttemptPolicy):
     def set_target(self, name: str, target: Target | None) -> None:
         """Set or (with ``None``) remove one effector's target."""
         checked = self._check_targets({name: target})
+        _check_target_counts({**{n: t for n, t in self._targets.items() if n != name}, **checked})
         self._targets.pop(name, None)
         self._targets.update(checked)
         self._pack_targets()
@@ -266,6 +276,7 @@ class Solver(AttemptPolicy):
                 raise TargetError(f"target for {name!r} must be a gsik.Target, got {type(t).__name__}")
             if t.enabled:  # a disabled target leaves its effector free, as no target does
                 out[name] = t
+        _check_target_counts(out)
         return out
 
     def _check_target_name(self, name) -> None:
@@ -451,16 +462,30 @@ class Solver(AttemptPolicy):
         return SolveResult(self._q.copy(), status, iterations, 0, residual, names, pos, ori, step_norm, attempts)
 
 
+def _check_target_counts(targets: Mapping[str, Target]) -> None:
+    """At most :data:`MAX_TARGETS` enabled targets on at most :data:`MAX_PRIORITY_LEVELS` levels: a step's cost
+    grows with both (a level is one least-squares solve in what the levels above leave)."""
+    if len(targets) > MAX_TARGETS:
+        raise TargetError(f"{len(targets):,} enabled targets; the limit is {MAX_TARGETS:,}")
+    levels = {t.priority for t in targets.values()}
+    if len(levels) > MAX_PRIORITY_LEVELS:
+        raise TargetError(f"targets on {len(levels):,} priority levels; the limit is {MAX_PRIORITY_LEVELS} (give "
+                          "targets that may trade off against each other the same priority)")
+
+
 def _posture_precision(weights, n: int) -> np.ndarray:
     """Posture weights as a precision: (n,) per DOF, or (n, n); checked."""
     try:
         P = np.array(weights, dtype=float)
-    except (TypeError, ValueError):
-        raise SolverError(f"posture weights must be numbers, got {weights!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise SolverError(f"posture weights must be numbers, got {show_value(weights)}") from None
     if P.ndim == 0:
         P = np.full(n, float(P))
     if P.shape not in ((n,), (n, n)) or not np.all(np.isfinite(P)):
         raise SolverError(f"posture weights must be finite: a scalar, ({n},) or ({n}, {n}), got shape {P.shape}")
+    if np.any(np.abs(P) > MAX_POSTURE_WEIGHT):
+        raise SolverError(f"posture weights must be at most {MAX_POSTURE_WEIGHT:g} in magnitude, got "
+                          f"{float(np.abs(P).max()):g}")
     if P.ndim == 1 and np.any(P < 0):
         raise SolverError(f"posture weights must be >= 0, got {P[P < 0][0]!r}")
     if P.ndim == 2 and (not np.allclose(P, P.T) or np.linalg.eigvalsh(P).min() < -1e-9 * max(1.0, abs(P).max())):

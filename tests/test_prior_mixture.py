@@ -71,7 +71,7 @@ def test_a_mixture_file_round_trips_and_is_not_read_as_a_gaussian(tmp_path):
 
 def test_bad_mixtures_are_refused_with_the_valid_choices():
     sk = load_skeleton("biped")
-    with pytest.raises(PriorError, match="components must be an integer in \\[1, 200\\].*\\[1, 2, 3, 4, 6, 8\\]"):
+    with pytest.raises(PriorError, match="components must be an integer in \\[1, 32\\].*\\[1, 2, 3, 4, 6, 8\\]"):
         fit_mixture(_two_clusters(400)[0], sk, components=0)
     with pytest.raises(PriorError, match="weights must be positive and sum to 1"):
         PoseMixture("arm", ("a.x",), [0.5, 0.6], [[0.0], [1.0]], [[[1.0]], [[1.0]]], 10, 0.1)
@@ -128,4 +128,4 @@ def test_learn_prior_with_components_rebuilds_the_mixture_the_library_learns_fro
 
 def test_learn_prior_refuses_a_bad_component_count(capsys):
     assert main(["learn-prior", "clip.bvh", "--components", "0", "--out", "m.npz"]) == 2
-    assert "must be a count >= 1 or 'auto', got '0'" in capsys.readouterr().err
+    assert "must be a count from 1 to 32 or 'auto', got '0'" in capsys.readouterr().err

@@ -430,7 +430,7 @@ class Document:
         if not target:
             raise gsik.GsikFileError("no file name to save to (use Save As)")
         file_state = self._file_state()
-        write_pose(target, self.pose(), **file_fields(kept_state(self)))
+        write_pose(target, self.pose(), skeleton=self.skeleton, **file_fields(kept_state(self)))
         self.path = str(target)
         self.history.set_clean()
         self._emit_file(file_state)

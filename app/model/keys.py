@@ -127,11 +127,15 @@ def bake_keys(skeleton: gsik.Skeleton, settings: gsik.SolverSettings, keys: Mapp
         raise GsikError("no keyed poses to bake: add a key first")
     frames = sorted(keys)
     baker = _Baker(skeleton, settings, keys[frames[0]])
+    placed = frames[0]  # the key the scratch solver holds exactly, if any: a held frame needs no solver work
     for i in range(max(frames[-1] + 1, n_frames)):
         k = int(np.searchsorted(frames, i, side="right")) - 1  # the last key at or before i
         if k < 0 or frames[k] == i or k == len(frames) - 1:
-            baker.place(keys[frames[max(k, 0)]])
+            if frames[max(k, 0)] != placed:
+                placed = frames[max(k, 0)]
+                baker.place(keys[placed])
         else:
+            placed = None
             a, b = frames[k], frames[k + 1]
             baker.drive(interpolated_targets(keys[a], keys[b], (i - a) / (b - a)), steps)
         baker.record()

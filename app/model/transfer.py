@@ -16,6 +16,7 @@ from gsik.anim.motion import Motion
 from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import BvhImport, import_bvh, write_motion_bvh
 from gsik.io.urdf_skeleton import skeleton_from_urdf
+from gsik.targets import MAX_COORDINATE
 from gsik_studio.model.document import Document
 
 #: Largest angle [rad] a padding DOF of an exported clip may have (the writer prints 1e-6 degrees).
@@ -32,7 +33,28 @@ def read_clip(path: str | os.PathLike) -> BvhImport:
         GsikFileError, BvhError: the file cannot be read or is not valid BVH.
     """
     name = os.path.splitext(os.path.basename(os.fspath(path)))[0] or "bvh"
-    return import_bvh(read_bvh(path), name=name)
+    imported = import_bvh(read_bvh(path), name=name, source=os.fspath(path))
+    check_playable(imported.motion, os.fspath(path))
+    return imported
+
+
+def check_playable(motion: Motion, source: str) -> None:
+    """Refuse, before any document changes, a clip the studio could not show: no frames, a skeleton without
+    degrees of freedom, or a root placed beyond :data:`gsik.targets.MAX_COORDINATE`."""
+    if motion.n_frames < 1:
+        raise gsik.BvhError("the clip has no frames (Frames: 0): nothing to play", path=source)
+    check_poseable(motion.skeleton, source)
+    far = np.abs(motion.world_from_root[:, :3, 3]).max(axis=1) > MAX_COORDINATE
+    if far.any():
+        raise gsik.BvhError(f"frame {int(np.argmax(far)) + 1} places the root beyond {MAX_COORDINATE:g} m",
+                            path=source)
+
+
+def check_poseable(skeleton: gsik.Skeleton, source: str) -> None:
+    """Refuse a skeleton without degrees of freedom: nothing in it could be posed."""
+    if skeleton.n_dofs == 0:
+        raise gsik.SkeletonError(f"{source}: skeleton {skeleton.name!r} has no degrees of freedom (no joint "
+                                 "rotates): nothing to pose")
 
 
 def motion_on(skeleton: gsik.Skeleton, motion: Motion) -> Motion | None:
@@ -60,8 +82,11 @@ def read_skeleton(path: str | os.PathLike) -> gsik.Skeleton:
         GsikError: the file cannot be read or is not a valid skeleton.
     """
     if os.fspath(path).lower().endswith(URDF_SUFFIXES):
-        return skeleton_from_urdf(path)
-    return gsik.load_skeleton(path)
+        skeleton = skeleton_from_urdf(path)
+    else:
+        skeleton = gsik.load_skeleton(path)
+    check_poseable(skeleton, os.fspath(path))
+    return skeleton
 
 
 def document_for(skeleton: gsik.Skeleton) -> Document:

@@ -10,6 +10,10 @@ from gsik.errors import GsikError
 from gsik.kinematics import world_frames
 from gsik.skeleton import Skeleton
 
+#: Seconds per frame a motion may have [s]: 10,000 frames per second to one frame in 1000 s (a shorter time makes
+#: the frame rate overflow, a longer one a clip that never plays).
+FRAME_TIME_RANGE = (1e-4, 1e3)
+
 
 @dataclass(frozen=True, eq=False)
 class Motion:
@@ -43,8 +47,9 @@ class Motion:
             raise GsikError(f"motion world_from_root must have shape ({n}, 4, 4), got {W.shape}")
         if len(self.roots) != n:
             raise GsikError(f"motion needs one root name per frame ({n}), got {len(self.roots)}")
-        if not (np.isfinite(self.frame_time) and self.frame_time > 0):
-            raise GsikError(f"motion frame_time must be > 0 seconds, got {self.frame_time!r}")
+        if not FRAME_TIME_RANGE[0] <= self.frame_time <= FRAME_TIME_RANGE[1]:
+            raise GsikError(f"motion frame_time must be from {FRAME_TIME_RANGE[0]:g} to {FRAME_TIME_RANGE[1]:g} "
+                            f"seconds, got {self.frame_time!r}")
         for name in set(self.roots):
             self.skeleton.frame_of(name)
         for a in (q, W):

@@ -104,9 +104,24 @@ class Retargeted:
                 for k, (f, j) in enumerate(self.mapping.items())]
 
 
+#: Scales [m per file unit] a clip may need: a millimetre rig is 1e-3, a rig in kilometres 1e3.
+SCALE_RANGE = (1e-6, 1e6)
+#: Farthest a clip's joint may be from its origin [file units]: beyond, float64 cannot resolve a bone's length.
+MAX_CLIP_EXTENT = 1e10
+
+
 def clip_world_positions(clip: BvhClip, up: str) -> np.ndarray:
-    """The clip's joint positions (n_frames, n_joints, 3) in gsik's z-up world, in file units."""
-    p = bvh_forward_kinematics(clip)[1]
+    """The clip's joint positions (n_frames >= 1, n_joints, 3) in gsik's z-up world, in file units;
+    :class:`RetargetError` for a clip of no frames or positions that overflow (a root at 1e308)."""
+    if clip.n_frames < 1:
+        raise RetargetError("cannot retarget a clip of no frames (Frames: 0)")
+    with np.errstate(all="ignore"):
+        p = bvh_forward_kinematics(clip)[1]
+    within = np.all(np.abs(p) <= MAX_CLIP_EXTENT, axis=(1, 2))  # False for NaN too
+    if not np.all(within):
+        frame = int(np.argmin(within))
+        raise RetargetError(f"cannot retarget: at frame {frame + 1} a joint is farther than {MAX_CLIP_EXTENT:g} file "
+                            "units from the origin (root position or OFFSETs too large)")
     return p @ Z_UP_TO_Y_UP if up == "y" else p  # row vectors: the export's turn inverted
 
 
@@ -196,16 +211,27 @@ def _scale(skeleton: Skeleton, frames: Mapping[str, str], rest_positions: np.nda
            clip_rest: dict[str, np.ndarray]) -> float:
     """Skeleton leg length over the clip's (``rest_positions`` (n_frames, 3) [m]; ``clip_rest``: frame -> position;
     ``frames``: canonical bone -> skeleton frame)."""
-    return float(_leg_length(lambda b: rest_positions[skeleton.frame_of(frames[b])])
-                 / _leg_length(lambda b: clip_rest[frames[b]]))
+    with np.errstate(all="ignore"):
+        clip_leg = _leg_length(lambda b: clip_rest[frames[b]])
+        scale = _leg_length(lambda b: rest_positions[skeleton.frame_of(frames[b])]) / clip_leg
+    if not SCALE_RANGE[0] <= scale <= SCALE_RANGE[1]:
+        raise RetargetError(f"cannot retarget: the clip's legs (hip to knee to ankle) are {clip_leg:.6g} file units "
+                            f"long, a scale of {scale:.6g} m per unit; the range is {SCALE_RANGE[0]:g} to "
+                            f"{SCALE_RANGE[1]:g} (zero or huge OFFSETs?)")
+    return float(scale)
 
 
 def _with_direction(found: dict[str, str], anchor: dict, rest_points: np.ndarray, scale: float) -> dict[str, str]:
     """``found`` less the joints that sit at their anchor's place in the clip's rest pose (a zero End Site gives
     no direction). ``rest_points`` (len(found), 3): the clip's rest positions of ``found``'s joints, in order."""
     at = dict(zip(found, rest_points))
-    return {f: j for f, j in found.items()
+    kept = {f: j for f, j in found.items()
             if anchor[f] is None or np.linalg.norm(at[f] - at[anchor[f]]) > 1e-6 / scale}
+    lost = [f"{f} ({found[f]!r})" for f in REQUIRED if f in found and f not in kept]
+    if lost:
+        raise RetargetError(f"cannot retarget: {', '.join(lost)} sit where the joint they hang from sits in the "
+                            "clip's rest pose (a zero OFFSET gives no direction)")
+    return kept
 
 
 def widened(skeleton: Skeleton, margin: float) -> Skeleton:

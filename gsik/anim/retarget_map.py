@@ -22,12 +22,16 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from gsik.errors import HumanoidError, RetargetError, choices
+from gsik.errors import HumanoidError, RetargetError, choices, show_value
 from gsik.humanoid import HUMANOID_BONES, Rig, recognise, rig_from_skeleton
 from gsik.humanoid.bones import BIPED_FRAMES
 from gsik.humanoid.names import label
 from gsik.io.files import read_text
-from gsik.io.yaml_safe import load_yaml
+from gsik.io.yaml_safe import MAX_BYTES, load_yaml
+
+#: The keys a mapping file may have, and its format number.
+MAP_KEYS = ("format", "map")
+MAP_FORMAT = 1
 
 #: The head's top: not a VRM bone, but a second point that carries the head's orientation.
 HEAD_TOP = "headTop"
@@ -38,11 +42,29 @@ REQUIRED_BONES = ("leftUpperLeg", "leftLowerLeg", "leftFoot", "rightUpperLeg", "
 def read_mapping(path: str | Path) -> dict[str, str]:
     """A mapping file's ``map`` (canonical bone or skeleton frame -> clip joint); see the module docstring."""
     # The one bounded reader every other format uses: size, depth and alias expansion limited, lines named.
-    data = load_yaml(read_text(path, "mapping file"), str(path), RetargetError).data
+    doc = load_yaml(read_text(path, "mapping file", limit=MAX_BYTES), str(path), RetargetError)
+    data = doc.data
     if not isinstance(data, dict) or not isinstance(data.get("map"), dict):
-        raise RetargetError(f"{path}: a mapping file needs a 'map:' of bone (or skeleton frame): clip joint, "
-                            f"got {data!r:.80}")
+        raise RetargetError(f"{path}: a mapping file needs a 'map:' of bone (or skeleton frame): clip joint, got "
+                            f"{show_value(data)}")
+    for key, value in data.items():
+        if key not in MAP_KEYS:
+            raise RetargetError(f"{path}:{doc.lines.get((key,), 1)}: unknown key {show_value(key)}; keys: "
+                                f"{choices(MAP_KEYS)}")
+    fmt = data.get("format", MAP_FORMAT)
+    if type(fmt) is not int or fmt != MAP_FORMAT:
+        raise RetargetError(f"{path}:{doc.lines.get(('format',), 1)}: format: {show_value(fmt)}; the mapping "
+                            f"format is {MAP_FORMAT}")
+    for frame, joint in data["map"].items():
+        if not (_is_name(frame) and _is_name(joint)):
+            raise RetargetError(f"{path}:{doc.lines.get(('map', frame), 1)}: map: {show_value(frame)}: "
+                                f"{show_value(joint)}: expected bone (or skeleton frame): clip joint, both names")
     return {str(k): str(v) for k, v in data["map"].items()}
+
+
+def _is_name(value) -> bool:
+    """A name as YAML reads it: text, or a whole number (a joint named ``1``)."""
+    return isinstance(value, str) or (isinstance(value, int) and not isinstance(value, bool))
 
 
 def _head_top(rig: Rig, head: str | None) -> str | None:

@@ -29,7 +29,7 @@ import numpy as np
 
 
 from gsik import validate
-from gsik.errors import ScenarioError, choices
+from gsik.errors import ScenarioError, choices, show_value
 from gsik.kinematics import world_frames
 from gsik.io.pose import Pose
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix, transform
@@ -182,8 +182,16 @@ def random_scenario(skeleton: Skeleton, seed: int, spread: float = 0.5, root: st
                                 q, root)
 
 
+#: Most random scenarios one call makes (each is a full scenario run when played).
+MAX_RANDOM_SCENARIOS = 10_000
+
+
 def random_scenarios(skeleton: Skeleton, n: int, seed: int = 0, spread: float = 0.5) -> tuple[Scenario, ...]:
-    """``n`` random poses with seeds ``seed, seed + 1, ...`` (see :func:`random_scenario`)."""
+    """``n`` (0 to :data:`MAX_RANDOM_SCENARIOS`) random poses with seeds ``seed, seed + 1, ...`` (see
+    :func:`random_scenario`)."""
+    if isinstance(n, bool) or not isinstance(n, int) or not 0 <= n <= MAX_RANDOM_SCENARIOS:
+        raise ScenarioError(f"random scenarios: the count must be a whole number from 0 to "
+                            f"{MAX_RANDOM_SCENARIOS:,}, got {show_value(n)}")
     return tuple(random_scenario(skeleton, seed + k, spread) for k in range(n))
 
 

@@ -47,7 +47,8 @@ def cmd_solve(args: argparse.Namespace, out: TextIO) -> int:
               f"{result.attempts} attempt{'s' if result.attempts != 1 else ''}) in {elapsed * 1e3:.1f} ms\n")
     _write_errors(out, result, targets)
     if args.out:
-        write_pose(args.out, pose.replace(joints=dict(zip(sk.dof_names, (float(v) for v in result.q)))))
+        solved = pose.replace(joints=dict(zip(sk.dof_names, (float(v) for v in result.q))))
+        write_pose(args.out, solved, read.library, read.keys, read.poles, read.clip, sk)  # every other block kept
         out.write(f"wrote {args.out}\n")
     return 0
 
@@ -150,7 +151,7 @@ def _write_scenario_files(args: argparse.Namespace, folder, scenarios: list, rep
     from gsik.anim.scenarios import scenario_pose
 
     for s, r in zip(scenarios, reports):
-        write_pose(folder / f"{s.name}.yaml", scenario_pose(s, r.motion.q[-1]))
+        write_pose(folder / f"{s.name}.yaml", scenario_pose(s, r.motion.q[-1]), skeleton=r.motion.skeleton)
         write_motion_bvh(folder / f"{s.name}.bvh", r.motion, units=args.units, up=args.up, end_sites=args.end_sites)
     out.write(f"wrote {2 * len(scenarios)} files to {args.out} (<scenario>.yaml: the final pose and its "
               f"targets; <scenario>.bvh: every frame of the run)\n")

@@ -27,7 +27,7 @@ def load_any_skeleton(spec: str):
     if suffix == ".urdf":
         return skeleton_from_urdf(spec)
     if suffix == ".bvh":
-        return import_bvh(read_bvh(spec)).skeleton
+        return import_bvh(read_bvh(spec), source=spec).skeleton
     return gsik.load_skeleton(spec)
 
 

@@ -190,6 +190,13 @@ def _fail(message: str) -> int:
     return 2
 
 
+def _inputs(args: argparse.Namespace) -> str:
+    """The files a command was given, for a message that has nothing else to name."""
+    named = [f"{show_value(getattr(args, k))}" for k in ("pose", "clip", "skeleton", "map")
+             if isinstance(getattr(args, k, None), str)]
+    return ", ".join(named) if named else "this input"
+
+
 def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
     """Run the command line; returns the exit code (``gsik`` and ``python -m gsik`` exit with it)."""
     out = sys.stdout if out is None else out
@@ -206,7 +213,7 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
         where = f" {show_value(exc.filename)}" if exc.filename else ""
         return _fail(f"cannot access{where}: {exc.strerror or exc}")
     except MemoryError:
-        return _fail("not enough memory for this input")
+        return _fail(f"not enough memory for {_inputs(args)}")
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130

@@ -8,12 +8,13 @@ from typing import TextIO
 
 from gsik.anim.retarget import Retargeted, Retargeter
 from gsik.anim.retarget_map import read_mapping
-from gsik.cli.common import check_out, load_any_skeleton
+from gsik.errors import RetargetError
+from gsik.cli.common import CommandError, check_out, load_any_skeleton
 from gsik.cli.progress import progress_for
 from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import write_motion_bvh
-from gsik.prior import fit_prior, write_prior
-from gsik.prior_mixture import fit_mixture, write_mixture
+from gsik.prior import CV_SEGMENTS, fit_prior, write_prior
+from gsik.prior_mixture import MAX_COMPONENTS, fit_mixture, write_mixture
 
 
 def add_commands(add, common) -> None:
@@ -43,7 +44,7 @@ def add_commands(add, common) -> None:
             "cross-validation over time segments of the clip.")
     _clip_options(p)
     p.add_argument("--out", metavar="PRIOR.npz", required=True, help="the pose prior file to write")
-    p.add_argument("--frames", type=int, help="use only the clip's first N frames")
+    p.add_argument("--frames", type=_frame_count, help="use only the clip's first N frames (N >= 1)")
     p.add_argument("--source", default="", help="what the clip is and its licence, kept in the file")
     p.add_argument("--components", type=_components, metavar="K|auto",
                    help="learn a mixture of K Gaussians (gsik.prior_mixture; 'auto': K chosen by cross-validation "
@@ -60,9 +61,20 @@ def _components(text: str) -> int | str:
         k = int(text)
     except ValueError:
         k = 0
-    if k < 1:
-        raise argparse.ArgumentTypeError(f"must be a count >= 1 or 'auto', got {text!r}")
+    if not 1 <= k <= MAX_COMPONENTS:
+        raise argparse.ArgumentTypeError(f"must be a count from 1 to {MAX_COMPONENTS} or 'auto', got {text!r}")
     return k
+
+
+def _frame_count(text: str) -> int:
+    """``--frames``: a count >= 1 (a negative count would silently drop frames from the end)."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}")
+    return n
 
 
 def _clip_options(p: argparse.ArgumentParser) -> None:
@@ -76,11 +88,27 @@ def _retarget(args: argparse.Namespace, frames: int | None = None) -> Retargeted
     clip = read_bvh(args.clip)
     if frames:
         clip = type(clip)(clip.joints, clip.frame_time, clip.motion[:frames])
+    if hasattr(args, "components"):
+        _check_learnable(args, clip.n_frames)
     mapping = read_mapping(args.map) if args.map else None
-    rt = Retargeter(load_any_skeleton(getattr(args, "onto", "biped")), clip, mapping, None if args.file_up == "auto" else args.file_up,
-                    name=args.clip, limit_margin=math.radians(getattr(args, "limit_margin", 0.0)))
-    with progress_for(args, "retarget") as bar:
-        return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
+    try:
+        rt = Retargeter(load_any_skeleton(getattr(args, "onto", "biped")), clip, mapping,
+                        None if args.file_up == "auto" else args.file_up,
+                        name=args.clip, limit_margin=math.radians(getattr(args, "limit_margin", 0.0)))
+        with progress_for(args, "retarget") as bar:
+            return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
+    except RetargetError as exc:  # name the clip where the retargeter did not
+        message = str(exc)
+        raise RetargetError(message if message.startswith(str(args.clip)) else f"{args.clip}: {message}") from None
+
+
+def _check_learnable(args: argparse.Namespace, n_frames: int) -> None:
+    """Before the retarget: enough frames to learn from, and to fit ``--components``."""
+    if n_frames < 2 * CV_SEGMENTS:
+        raise CommandError(f"{args.clip}: {n_frames} frames; learning a prior needs at least {2 * CV_SEGMENTS}")
+    if isinstance(args.components, int) and args.components > n_frames // 2:
+        raise CommandError(f"--components {args.components}: {n_frames} frames fit at most {n_frames // 2} "
+                           "components")
 
 
 def _report(r: Retargeted, out: TextIO) -> None:

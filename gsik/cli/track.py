@@ -56,7 +56,7 @@ def _track(args: argparse.Namespace, path: str, out_path: str | None, progress=N
     from gsik.anim.tracking import track_clip
 
     clip = read_bvh(path)
-    imported = import_bvh(clip, strip_namespace=args.strip_namespace, up=args.file_up,
+    imported = import_bvh(clip, strip_namespace=args.strip_namespace, up=args.file_up, source=path,
                           **({"scale": args.scale} if args.scale else {}))
     targets, position_only, priorities = _targets(args)
     options = dict(settings_overrides(args))
@@ -162,6 +162,11 @@ def _write_target_summary(out: TextIO, result, n_frames: int) -> None:
         out.write(f"  {name:<{w}}  {mm(float(col.mean())):>12}  {mm(float(col.max())):>12}\n")
 
 
+def _percent(length: float, height: float) -> str:
+    """``length`` [m] as a percentage of ``height`` [m]; ``-`` for a clip of no height (all its joints level)."""
+    return f"{100 * length / height:.2f}%" if height > 0.0 else "-"
+
+
 def _write_body_table(out: TextIO, result) -> None:
     """Every joint and site against the clip: p95 and max, in mm and % of the body's height; the worst joint."""
     rows = result.body_table(95.0)
@@ -172,13 +177,13 @@ def _write_body_table(out: TextIO, result) -> None:
     worst = next((r for r in rows if r.name in joints and not r.tracked), None)
     if worst is not None:
         out.write(f"worst untracked joint: {worst.name}, {mm(worst.max_error)} at frame {worst.worst_frame} "
-                  f"(p95 {100 * worst.percentile_error / h:.2f}% of the body height {h:.3f} m)\n")
+                  f"(p95 {_percent(worst.percentile_error, h)} of the body height {h:.3f} m)\n")
     w = max(len(r.name) for r in rows)
     out.write("every joint and site against the clip (all frames, * tracked):\n")
     out.write(f"  {'':1} {'name':<{w}}  {'p95':>12} {'p95 %':>7}  {'max':>12}  {'at frame':>8}\n")
     for r in rows:
         out.write(f"  {'*' if r.tracked else ' '} {r.name:<{w}}  {mm(r.percentile_error):>12} "
-                  f"{100 * r.percentile_error / h:6.2f}%  {mm(r.max_error):>12}  {r.worst_frame:>8}\n")
+                  f"{_percent(r.percentile_error, h):>7}  {mm(r.max_error):>12}  {r.worst_frame:>8}\n")
 
 
 # -- a folder of clips ---------------------------------------------------------------------------------

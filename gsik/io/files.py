@@ -15,14 +15,97 @@ from gsik.errors import GsikFileError, show_value
 MAX_PATH_CHARS = 240
 
 
-def read_bytes(path: str | os.PathLike, what: str = "file") -> bytes:
-    """The bytes of a file, or :class:`GsikFileError` naming ``what``, the path and the reason."""
-    _check_path(path, f"cannot read {what}")
+#: Largest file any reader takes unless it names its own limit [bytes].
+MAX_FILE_BYTES = 64 * 1024 * 1024
+
+
+def read_bounded(path: str | os.PathLike, what: str = "file", limit: int = MAX_FILE_BYTES) -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes: the one way gsik opens a file it reads.
+
+    Checked before a byte is read, so a hostile path costs a ``stat`` and nothing more:
+
+    - the path is a regular file (``os.stat``): a FIFO (which would block forever), a device (``/dev/zero``,
+      ``/dev/urandom``: endless), a directory or a socket is refused;
+    - its size is at most ``limit``;
+    - it is opened non-blocking and checked again on the open descriptor (``fstat``), so a file swapped for a
+      FIFO or a device between the two checks is refused too;
+    - at most ``limit + 1`` bytes are read: a file that grew past ``limit`` after the check is refused without
+      reading the rest.
+
+    Args:
+        path: The file.
+        what: What the file is, for the message (``"pose file"``).
+        limit: Most bytes accepted.
+
+    Returns:
+        The file's bytes (``len <= limit``).
+
+    Raises:
+        GsikFileError: naming ``what``, the path and the reason (not a regular file, larger than ``limit``,
+            cannot be opened or read).
+    """
+    action = f"cannot read {what}"
+    _check_path(path, action)
     try:
-        with open(path, "rb") as f:
-            return f.read()
+        _check_regular(os.stat(path), path, action, limit)
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+        with os.fdopen(fd, "rb") as f:
+            size = _check_regular(os.fstat(f.fileno()), path, action, limit)
+            data = _read_at_most(f, size, limit)
+    except GsikFileError:
+        raise
     except OSError as exc:
-        raise file_error(f"cannot read {what}", path, exc) from exc
+        raise file_error(action, path, exc) from exc
+    if len(data) > limit:
+        raise _too_large(action, path, f"more than {limit:,}", limit)
+    return data
+
+
+#: Bytes read at a time past the size a file had when it was opened [bytes].
+_CHUNK = 1 << 20
+
+
+def _read_at_most(f, size: int, limit: int) -> bytes:
+    """The file's bytes, at most ``limit + 1`` of them: its ``size`` at open in one read (never a buffer of
+    ``limit`` bytes for a small file), then chunks while it grows."""
+    chunks, total, want = [], 0, size + 1
+    while total <= limit:
+        chunk = f.read(min(want, limit + 1 - total))
+        if not chunk:
+            break
+        chunks.append(chunk)
+        total += len(chunk)
+        want = _CHUNK
+    return chunks[0] if len(chunks) == 1 else b"".join(chunks)
+
+
+def _check_regular(st: os.stat_result, path: str | os.PathLike, action: str, limit: int) -> int:
+    """The size of a regular file of at most ``limit`` bytes; refuses anything else."""
+    if not stat.S_ISREG(st.st_mode):
+        raise GsikFileError(f"{action} {show_value(os.fspath(path), MAX_PATH_CHARS)}: not a regular file "
+                            f"({_kind(st.st_mode)}); gsik reads only regular files")
+    if st.st_size > limit:
+        raise _too_large(action, path, f"{st.st_size:,}", limit)
+    return st.st_size
+
+
+def _too_large(action: str, path: str | os.PathLike, size: str, limit: int) -> GsikFileError:
+    return GsikFileError(f"{action} {show_value(os.fspath(path), MAX_PATH_CHARS)}: the file is {size} bytes; "
+                         f"the limit is {limit:,} bytes")
+
+
+def _kind(mode: int) -> str:
+    """What a non-regular file is, in words."""
+    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a file"
+
+
+def read_bytes(path: str | os.PathLike, what: str = "file", limit: int = MAX_FILE_BYTES) -> bytes:
+    """The bytes of a file, through :func:`read_bounded` (regular files of at most ``limit`` bytes only)."""
+    return read_bounded(path, what, limit)
 
 
 def _check_path(path: str | os.PathLike, action: str) -> None:
@@ -33,7 +116,7 @@ def _check_path(path: str | os.PathLike, action: str) -> None:
 
 
 def read_text(path: str | os.PathLike, what: str = "file", encoding: str = "utf-8",
-              fallback: str | None = None) -> str:
+              fallback: str | None = None, limit: int = MAX_FILE_BYTES) -> str:
     """The text of a file, line ends kept as written; every format reads through here.
 
     Args:
@@ -42,11 +125,12 @@ def read_text(path: str | os.PathLike, what: str = "file", encoding: str = "utf-
         encoding: Tried first (``"utf-8-sig"`` also drops a byte-order mark).
         fallback: Tried when ``encoding`` fails (``"latin-1"`` decodes every byte);
             ``None`` makes undecodable text an error.
+        limit: Most bytes read (:func:`read_bounded`).
 
     Raises:
         GsikFileError: the file cannot be read or decoded, naming it and the reason.
     """
-    data = read_bytes(path, what)
+    data = read_bounded(path, what, limit)
     try:
         return data.decode(encoding)
     except UnicodeDecodeError as exc:
@@ -82,7 +166,12 @@ STALE_TEMPORARY_AGE = 600.0
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Replace ``path`` with ``text`` (UTF-8) atomically.
+    """Replace ``path`` with ``text`` (UTF-8) atomically: :func:`atomic_write_bytes`."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+    """Replace ``path`` with ``data`` atomically; every file gsik writes goes through here.
 
     Writes a temporary file in the same directory, fsyncs it and renames it
     over ``path``; on any failure the temporary file is removed and an
@@ -105,7 +194,7 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     try:
         tmp, fd = _open_temporary(directory, base, target)
         with os.fdopen(fd, "wb") as f:
-            f.write(text.encode("utf-8"))
+            f.write(data)
             f.flush()
             os.fsync(f.fileno())
         if mode is not None:

@@ -9,7 +9,7 @@ from pathlib import Path
 from gsik.errors import GsikFileError, SkeletonError, choices, show_value
 from gsik import validate
 from gsik.io.files import read_text
-from gsik.io.yaml_safe import load_yaml
+from gsik.io.yaml_safe import MAX_BYTES, load_yaml
 from gsik.rotations import matrix_from_quaternion
 from gsik.skeleton_builder import check_size
 from gsik.skeleton import AXES, JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
@@ -43,7 +43,7 @@ def load_skeleton(name_or_path: str | os.PathLike) -> Skeleton:
             raise SkeletonError(f"no bundled skeleton {show_value(s)}; bundled: {choices(bundled)} (or give a path to a .yaml file)")
         path = _bundled_dir() / f"{s}.yaml"
     try:
-        text = read_text(path, "skeleton file")
+        text = read_text(path, "skeleton file", limit=MAX_BYTES)
     except GsikFileError as exc:  # a skeleton that cannot be loaded is a SkeletonError, whatever the cause
         raise SkeletonError(str(exc)) from None
     return skeleton_from_yaml(text, source=str(path))

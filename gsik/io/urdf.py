@@ -30,6 +30,12 @@ JOINT_TYPES = ("revolute", "continuous", "fixed", "prismatic")
 _UNSUPPORTED_TYPES = ("floating", "planar")
 _LIMITED_TYPES = ("revolute", "prismatic")
 
+#: Largest URDF file read [bytes] (a URDF names its meshes; it does not hold them).
+MAX_URDF_BYTES = 16 * 1024 * 1024
+
+#: Most ``<link>`` and most ``<joint>`` elements a robot may have (as many frames as a gsik skeleton may have).
+MAX_URDF_ELEMENTS = 8192
+
 
 def _frozen_vector(v, what: str) -> np.ndarray:
     return finite_array(v, (3,), what, UrdfError)
@@ -382,9 +388,24 @@ def _a_cycle(start: str, parent_of: dict[str, UrdfJoint]) -> str:
         path.append(link)
 
 
+#: Deepest nesting of XML elements (a URDF needs 4: robot, joint, limit... ).
+MAX_XML_DEPTH = 256
+
+_XML_CHUNK = 1 << 16
+
+
 def _xml_root(data: str | bytes, source: str) -> ET.Element:
+    """The parsed XML, fed in chunks: past :data:`MAX_URDF_ELEMENTS` links or joints, or
+    :data:`MAX_XML_DEPTH` levels, the rest of the file is never parsed."""
     try:
-        return ET.fromstring(data)
+        parser = ET.XMLPullParser(events=("start", "end"))
+        depth, counts, roots = 0, {"link": 0, "joint": 0}, []
+        for at in range(0, len(data), _XML_CHUNK):
+            parser.feed(data[at:at + _XML_CHUNK])
+            depth = _count_events(parser, depth, counts, roots, source)
+        parser.close()
+        _count_events(parser, depth, counts, roots, source)
+        return roots[0]
     except ET.ParseError as exc:
         line = exc.position[0] if getattr(exc, "position", None) else None
         raise UrdfError(f"{source}:{line}: malformed XML: {exc}") from None
@@ -392,6 +413,29 @@ def _xml_root(data: str | bytes, source: str) -> ET.Element:
         raise UrdfError(f"{source}: cannot decode the XML: {show_value(str(exc))}") from None
     except UnicodeError as exc:  # text holding lone surrogates cannot be encoded for the parser
         raise UrdfError(f"{source}: cannot encode the XML text: {exc.reason} at character {exc.start}") from None
+
+
+def _count_events(parser: ET.XMLPullParser, depth: int, counts: dict[str, int], roots: list[ET.Element],
+                  source: str) -> int:
+    """Follow the parser's new events: the element depth after them (the document's element is put in
+    ``roots``); refuses past the bounds."""
+    for event, elem in parser.read_events():
+        if event == "end":
+            depth -= 1
+            continue
+        depth += 1
+        if depth == 1:
+            roots.append(elem)
+        if depth > MAX_XML_DEPTH:
+            raise UrdfError(f"{source}: XML elements nested deeper than {MAX_XML_DEPTH:,}; the limit is "
+                            f"{MAX_XML_DEPTH:,}")
+        tag = local_tag(elem.tag)
+        if depth == 2 and tag in counts:
+            counts[tag] += 1
+            if counts[tag] > MAX_URDF_ELEMENTS:
+                raise UrdfError(f"{source}: more than {MAX_URDF_ELEMENTS:,} <{tag}> elements; the limit is "
+                                f"{MAX_URDF_ELEMENTS:,}")
+    return depth
 
 
 def _robot_from_xml(root: ET.Element, source: str) -> UrdfRobot:
@@ -442,7 +486,7 @@ def read_urdf(path: str | os.PathLike) -> UrdfRobot:
         GsikFileError: the file cannot be read.
     """
     source = os.fspath(path)
-    data = read_bytes(path, "URDF file")  # bytes: the XML parser decodes them as declared
+    data = read_bytes(path, "URDF file", MAX_URDF_BYTES)  # bytes: the XML parser decodes them as declared
     return _robot_from_xml(_xml_root(data, source), source)
 
 

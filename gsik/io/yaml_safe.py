@@ -34,6 +34,9 @@ MAX_DEPTH = 64
 #: Longest YAML text accepted [characters]: far above a skeleton at the solver's DOF limit.
 MAX_CHARS = 8 * 1024 * 1024
 
+#: Largest YAML file read [bytes]: :data:`MAX_CHARS` characters of up to 4 bytes each in UTF-8.
+MAX_BYTES = 4 * MAX_CHARS
+
 #: Most values (scalars, lists, mappings) a document may hold, counting each alias as the values it repeats.
 MAX_VALUES = 1_000_000
 

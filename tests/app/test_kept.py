@@ -173,7 +173,7 @@ def test_a_key_sequence_keeps_its_fps_and_length(doc, tmp_path):
 @pytest.mark.parametrize("old, new, message", [
     ("  left_knee:", "  hips:", "pole target on 'hips': the studio has pole targets on"),
     ("    - frame: 15", "    - frame: 0", "keys.poses.1.frame: a second key at frame 0"),
-    ("  fps: 30.0", "  fps: -3.0", "keys.fps: must be above 0"),
+    ("  fps: 30.0", "  fps: -3.0", "keys.fps: must be from 0.001 to 1000 frames per second"),
 ])
 def test_a_bad_file_changes_nothing(doc, tmp_path, old, new, message):
     _everything(doc)
@@ -203,7 +203,7 @@ def test_new_clears_keys_clip_and_poles(doc):
 @pytest.mark.parametrize("frame", [-1, 10**12, 2.5, float("nan"), "3", True])
 def test_a_key_at_a_frame_no_file_could_keep_is_refused_and_changes_nothing(doc, frame):
     doc.timeline.add_key(0)
-    with pytest.raises(gsik.GsikError, match="a key's frame must be a whole number >= 0 and <= 99999"):
+    with pytest.raises(gsik.GsikError, match="a key's frame must be a whole number >= 0 and <= 9999"):
         doc.timeline.add_key(frame)
     with pytest.raises(gsik.GsikError, match="a key's frame must be a whole number"):
         doc.timeline.move_key(0, frame)

@@ -90,13 +90,14 @@ def _replace(text: str, old: str, new: str) -> str:
     ("    - frame: 7", f"    - frame: {MAX_SEQUENCE_FRAMES}", r"keys.poses.1.frame: must be a whole number from 0 to"),
     ("    - frame: 7", "    - frame: 7.0", r"keys.poses.1.frame: must be a whole number"),
     ("  length: 61", "  length: 12", r"keys.length: must be at least the last key's frame \+ 1 \(41\), got 12"),
-    ("  length: 61", "  length: 10000000000", r"keys.length: must be a whole number from 0 to 100000"),
-    ("  fps: 24.0", "  fps: 0", r"keys.fps: must be above 0 and at most 1000"),
+    ("  length: 61", "  length: 10000000000", r"keys.length: must be a whole number from 0 to 10000"),
+    ("  fps: 24.0", "  fps: 0", r"keys.fps: must be from 0.001 to 1000 frames per second, got 0"),
     ("  fps: 24.0", "  fps: .nan", r"keys.fps: must be a finite number"),
     ("  left_knee:", "  left_kneee:", r"poles.left_kneee: unknown joint 'left_kneee'; valid: "),
     ("    enabled: false\nclip:", "    enabled: 0\nclip:", r"poles.right_elbow.enabled: must be true or false"),
     ("    position: [0.1234567891", "    position: [1.0e+7", r"poles.left_knee.position: must be within"),
-    ("  frame_time: 0.008333333333333333", "  frame_time: -1.0", r"clip.frame_time: must be above 0 seconds"),
+    ("  frame_time: 0.008333333333333333", "  frame_time: -1.0",
+     r"clip.frame_time: must be from 0.0001 to 1000 seconds, got -1.0"),
     ("  dofs: [waist.x, ", "  dofs: [", r"clip.dofs: must list the skeleton's 30 DOFs in its order"),
     ("    - root: left_foot", "    - root: knee", r"clip.frames.1.root: unknown root 'knee'"),
     ("      world_from_root: [[", "      world_from_root: [[0.0, 0.0, 0.0, 0.0], [",
@@ -113,14 +114,32 @@ def test_errors_name_the_file_line_field_and_value(skeleton, everything, old, ne
         pose_from_yaml(text, skeleton, "bad.yaml")
 
 
-def test_a_clip_transform_that_is_not_a_rotation_is_refused(skeleton, everything):
+_ROTATION = r"the first three columns must be a rotation \(orthonormal within 1e-06, determinant \+1\)"
+
+
+@pytest.mark.parametrize("field, line, message", [
+    ("world_from_root", "      world_from_root: [[1.5, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]",
+     _ROTATION),
+    ("world_from_root", "      world_from_root: [[1.0, 0.0, 0.0, 2.0e+6], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]",
+     r"must .*within 1e\+06 m of the origin"),
+    ("root", "    - root: waist.x", r"unknown root 'waist.x'; valid: any joint or site"),
+])
+def test_a_clip_frame_the_reader_refuses_is_never_written(skeleton, everything, field, line, message):
     m = everything["clip"].motion
-    W = m.world_from_root.copy()
-    W[2, :3, :3] *= 1.001
-    bad = Clip("c", Motion(skeleton, m.q, m.roots, W, m.frame_time))
-    with pytest.raises(gsik.PoseError, match=r"bad.yaml:\d+: clip.frames.2.world_from_root: the first three columns "
-                                             r"must be a rotation \(orthonormal within 1e-06, determinant \+1\)"):
-        pose_from_yaml(pose_to_yaml(_pose(skeleton, 0), clip=bad), skeleton, "bad.yaml")
+    W, roots = m.world_from_root.copy(), list(m.roots)
+    if field == "root":
+        roots[2] = "waist.x"  # a rotation's frame: Motion takes it, a pose file does not
+    else:
+        W[2, :3] = [[float(v) for v in row.split(", ")] for row in line.split("[[")[1].split("]]")[0].split("], [")]
+    bad = Clip("c", Motion(skeleton, m.q, tuple(roots), W, m.frame_time))
+    with pytest.raises(gsik.PoseError, match=rf"gsik would not read this pose file back \(clip.frames.2.{field}: "
+                                             + message):
+        pose_to_yaml(_pose(skeleton, 0), clip=bad)
+    lines = pose_to_yaml(_pose(skeleton, 0), clip=everything["clip"]).splitlines()
+    k = [i for i, text in enumerate(lines) if text.strip().startswith(("- root:", "world_from_root:")[field != "root"])]
+    lines[k[2]] = line  # frame 2's
+    with pytest.raises(gsik.PoseError, match=rf"bad.yaml:\d+: clip.frames.2.{field}: " + message):
+        pose_from_yaml("\n".join(lines) + "\n", skeleton, "bad.yaml")
 
 
 def test_an_empty_clip_is_refused(skeleton, everything):

@@ -99,7 +99,10 @@ class BvhClip:
         if motion.ndim != 2 or motion.shape[1] != starts[-1]:
             raise BvhError(f"motion must have shape (n_frames, {starts[-1]}), got {motion.shape}")
         if not np.all(np.isfinite(motion)):
-            raise BvhError("motion contains non-finite values")
+            frame, column = (int(i) for i in np.argwhere(~np.isfinite(motion))[0])
+            joint = next(j for j, s in enumerate(starts[1:]) if column < s)
+            raise BvhError(f"motion contains non-finite values: frame {frame + 1}, joint {joints[joint].name!r} "
+                           f"{joints[joint].channels[column - starts[joint]]} is {float(motion[frame, column])!r}")
         motion.flags.writeable = False
         object.__setattr__(self, "motion", motion)
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from gsik.errors import BvhError, choices, show_value
 from gsik.io.bvh.clip import CHANNEL_LOOKUP, CHANNEL_NAMES, BvhClip, BvhJoint
+from gsik.io.bvh.limits import MAX_BVH_BYTES, check_braces, check_frame_time, check_frames, check_joints
 from gsik.io.files import read_text
 from gsik.io.names import unique_name
 
@@ -51,11 +52,12 @@ class _Block:
 
 
 class _Tokens:
-    """A cursor over the ``(token, line)`` pairs of the hierarchy section."""
+    """A cursor over the ``(token, line)`` pairs of the hierarchy section, read lazily: a hierarchy past a bound
+    is refused at the bound, before the rest of it is split into tokens."""
 
-    def __init__(self, pairs: list[tuple[str, int]], source: str, eof_line: int):
-        self.pairs = pairs
-        self.pos = 0
+    def __init__(self, pairs: Iterator[tuple[str, int]], source: str, eof_line: int):
+        self._pairs = pairs
+        self._ahead: tuple[str, int] | None = None
         self.source = source
         self.eof_line = eof_line
 
@@ -63,13 +65,20 @@ class _Tokens:
         return BvhError(message, line=line, path=self.source)
 
     def peek(self) -> tuple[str, int] | None:
-        return self.pairs[self.pos] if self.pos < len(self.pairs) else None
+        if self._ahead is None:
+            self._ahead = next(self._pairs, None)
+        return self._ahead
+
+    def advance(self) -> None:
+        """Drop the token :meth:`peek` showed."""
+        self.peek()
+        self._ahead = None
 
     def next(self, eof_message: str) -> tuple[str, int]:
-        if self.pos >= len(self.pairs):
+        pair = self.peek()
+        if pair is None:
             raise self.error(eof_message, self.eof_line)
-        pair = self.pairs[self.pos]
-        self.pos += 1
+        self._ahead = None
         return pair
 
 
@@ -107,8 +116,8 @@ def _find_motion_line(lines: list[str]) -> int | None:
     return None
 
 
-def _tokenize(lines: list[str]) -> list[tuple[str, int]]:
-    return [(m.group(), n) for n, line in enumerate(lines, start=1) for m in _TOKEN_RE.finditer(line)]
+def _tokenize(lines: list[str]) -> Iterator[tuple[str, int]]:
+    return ((m.group(), n) for n, line in enumerate(lines, start=1) for m in _TOKEN_RE.finditer(line))
 
 
 def _read_offset(tokens: _Tokens, line: int, label: str) -> list[float]:
@@ -117,7 +126,7 @@ def _read_offset(tokens: _Tokens, line: int, label: str) -> list[float]:
         nxt = tokens.peek()
         if nxt is None or nxt[0].upper() in _KEYWORDS:
             raise tokens.error(f"OFFSET of {label} needs 3 numbers, found {len(values)}", line)
-        tokens.pos += 1
+        tokens.advance()
         values.append(_number(nxt[0], nxt[1], f"OFFSET of {label}", tokens.source))
     return values
 
@@ -136,7 +145,7 @@ def _read_channels(tokens: _Tokens, line: int, label: str) -> tuple[str, ...]:
             raise tokens.error(
                 f"CHANNELS of {label} declares {count} channels but lists {len(channels)}", line
             )
-        tokens.pos += 1
+        tokens.advance()
         name = CHANNEL_LOOKUP.get(nxt[0].lower())
         if name is None:
             raise tokens.error(
@@ -207,6 +216,7 @@ def _parse_hierarchy(tokens: _Tokens) -> list[_Raw]:
         elif upper == "CHANNELS":
             _read_joint_channels(tokens, raw, top, line)
         elif upper in ("JOINT", "END"):
+            check_joints(len(raws) + 1, len(stack) + 1, tokens.source, line)
             stack.append(_open_child(tokens, raws, names, top, upper, tok, line))
         else:
             raise _unexpected(tokens, raw, top, tok, line)
@@ -334,6 +344,7 @@ def _parse_motion_header(lines: list[str], motion_at: int, source: str) -> tuple
     frame_time = _number(m.group(1), i + 1, "Frame Time", source)
     if frame_time <= 0.0:
         raise BvhError(f"Frame Time must be positive, found {m.group(1)!r}", line=i + 1, path=source)
+    check_frame_time(frame_time, source, i + 1)
     return n_frames, frame_time, i + 1
 
 
@@ -442,8 +453,10 @@ def parse_bvh(text: str, source: str = "<string>") -> BvhClip:
         The clip; its arrays are read-only.
 
     Raises:
-        BvhError: malformed text, with ``.line`` (1-based) and ``.path`` set.
+        BvhError: malformed text, or past a bound of :mod:`gsik.io.bvh.limits`, with ``.line`` (1-based) and
+            ``.path`` set.
     """
+    check_braces(text, source)
     lines = _split_lines(text)
     if not any(line.strip() for line in lines):
         raise BvhError("empty file", line=1, path=source)
@@ -462,6 +475,7 @@ def parse_bvh(text: str, source: str = "<string>") -> BvhClip:
     )
     labels = tuple(f"{j.name} {c}" for j in joints for c in j.channels)
     n_frames, frame_time, data_at = _parse_motion_header(lines, motion_at, source)
+    check_frames(n_frames, len(labels), len(joints), source, data_at - 1)
     motion = _motion_values(lines, data_at, n_frames, labels, source)
     return BvhClip(joints=joints, frame_time=frame_time, motion=motion)
 
@@ -474,4 +488,5 @@ def read_bvh(path: str | os.PathLike) -> BvhClip:
         GsikFileError: the file cannot be read.
     """
     # Old exporters write Latin-1 names; every byte decodes.
-    return parse_bvh(read_text(path, "BVH file", "utf-8-sig", fallback="latin-1"), source=os.fspath(path))
+    text = read_text(path, "BVH file", "utf-8-sig", fallback="latin-1", limit=MAX_BVH_BYTES)
+    return parse_bvh(text, source=os.fspath(path))

@@ -128,6 +128,7 @@ def import_bvh(
     strip_namespace: bool = False,
     name: str = "bvh",
     unwrap: bool = True,
+    source: str = "<bvh>",
 ) -> BvhImport:
     """A BVH clip as a gsik skeleton and motion (see the module's conventions).
 
@@ -144,6 +145,7 @@ def import_bvh(
         name: The skeleton's name.
         unwrap: Unwrap each rotation channel over the frames (default); ``False``
             takes the file's angles as they are (limits then stop at a wrap).
+        source: The clip's file, for the messages of a skeleton that cannot be built.
 
     Raises:
         BvhError: a bad argument, an unknown effector or root (listing the
@@ -158,7 +160,7 @@ def import_bvh(
     if root_name not in b.taken:
         raise BvhError(f"no joint or site {root_name!r} to use as the root; joints: {choices(b.joint_names)}; "
                        f"sites: {choices(s.name for s in b.sites)}")
-    sk = build_skeleton(name, b.specs, b.sites, b.segments(), effectors=chosen, root=root_name, source="<bvh>")
+    sk = build_skeleton(name, b.specs, b.sites, b.segments(), effectors=chosen, root=root_name, source=source)
     return BvhImport(sk, b.motion(sk), tuple(chosen), scale, up, tuple(b.messages), clip,
                      tuple(b.dof_columns.items()), up_reason)
 

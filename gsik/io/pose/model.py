@@ -38,6 +38,8 @@ _CLIP_FRAME_KEYS = ("root", "world_from_root", "angles")
 
 #: Most frames per second a key sequence may have.
 MAX_FPS = 1000.0
+#: Fewest frames per second (one frame in 1000 s): below, a sequence's frame time overflows or never plays.
+MIN_FPS = 1e-3
 
 #: What a pose's ``skeleton:`` field ends in when it names a skeleton file instead of a bundled skeleton.
 SKELETON_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".bvh")

@@ -8,7 +8,7 @@ from typing import Any, NamedTuple
 
 from gsik.errors import PoseError, choices, show_value
 from gsik.io.files import read_text
-from gsik.io.yaml_safe import load_yaml
+from gsik.io.yaml_safe import MAX_BYTES, load_yaml
 from gsik.io.pose import sequence
 from gsik.io.pose.model import (LIMIT_TOLERANCE, POSE_FORMAT, QUATERNION_NORM_TOLERANCE, SKELETON_FILE_SUFFIXES,
                                _CLIP_KEY, _KEYS_KEY, _LIBRARY_KEY, _OPTIONAL_TOP_KEYS, _POLES_KEY, _POSE_KEYS,
@@ -152,7 +152,7 @@ def parse_pose(text: str, source: str = "<pose>") -> PoseDocument:
 
 def read_pose_document(path: str | os.PathLike) -> PoseDocument:
     """Read and parse a pose file once (:class:`GsikFileError` if it cannot be read)."""
-    return parse_pose(read_text(path, "pose file"), os.fspath(path))
+    return parse_pose(read_text(path, "pose file", limit=MAX_BYTES), os.fspath(path))
 
 
 def pose_from_yaml(text: str, skeleton: Skeleton, source: str = "<pose>") -> PoseRead:

@@ -13,19 +13,21 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gsik.anim.motion import Motion
-from gsik.errors import choices, show_value
+from gsik.anim.motion import FRAME_TIME_RANGE, Motion
+from gsik.errors import PoseError, choices, show_value
 from gsik.io.pose.model import (_CLIP_FRAME_KEYS, _CLIP_KEY, _CLIP_KEYS, _KEY_SEQUENCE_KEYS, _KEYS_KEY, _POLE_KEYS,
-                               _POLES_KEY, _POSE_KEYS, MAX_FPS, Clip, KeySequence, Pole, Pose)
+                               _POLES_KEY, _POSE_KEYS, MAX_FPS, MIN_FPS, Clip, KeySequence, Pole, Pose)
 from gsik.io.yaml_safe import yaml_string
 from gsik.rotations import ROTATION_TOLERANCE
 from gsik.skeleton import Skeleton
+from gsik.targets import MAX_COORDINATE
 
 if TYPE_CHECKING:
     from gsik.io.pose.read import _Reader
 
-#: Most frames a key sequence may span (a key's frame and the length are below it): 55 minutes at 30 fps.
-MAX_SEQUENCE_FRAMES = 100_000
+#: Most frames a key sequence may span (a key's frame and the length are below it): 5.5 minutes at 30 fps. The
+#: studio solves every frame between keys when it plays or exports them (about 0.5 ms each): a bound in seconds.
+MAX_SEQUENCE_FRAMES = 10_000
 
 #: Frames per second of a key sequence when the file does not say.
 DEFAULT_FPS = 30.0
@@ -40,8 +42,8 @@ def read_keys(r: _Reader, value, pose_at: Callable[[dict, tuple], Pose]) -> KeyS
     at = (_KEYS_KEY,)
     seq = r.mapping(value, at, _KEY_SEQUENCE_KEYS[2:], _KEY_SEQUENCE_KEYS[:2])
     fps = r.number(seq.get("fps", DEFAULT_FPS), at + ("fps",))
-    if not 0.0 < fps <= MAX_FPS:
-        r.fail(at + ("fps",), f"must be above 0 and at most {MAX_FPS:g} frames per second, got {fps!r}")
+    if not MIN_FPS <= fps <= MAX_FPS:
+        r.fail(at + ("fps",), f"must be from {MIN_FPS:g} to {MAX_FPS:g} frames per second, got {fps!r}")
     keys: dict[int, Pose] = {}
     for i, entry in enumerate(r.items(seq["poses"], at + ("poses",), "keyed poses")):
         here = at + ("poses", i)
@@ -79,8 +81,9 @@ def read_clip(r: _Reader, value, skeleton: Skeleton) -> Clip:
     c = r.mapping(value, at, _CLIP_KEYS)
     name = r.name(c["name"], at + ("name",))
     frame_time = r.number(c["frame_time"], at + ("frame_time",))
-    if not frame_time > 0.0:
-        r.fail(at + ("frame_time",), f"must be above 0 seconds, got {frame_time!r}")
+    if not FRAME_TIME_RANGE[0] <= frame_time <= FRAME_TIME_RANGE[1]:
+        r.fail(at + ("frame_time",), f"must be from {FRAME_TIME_RANGE[0]:g} to {FRAME_TIME_RANGE[1]:g} seconds, got "
+                                     f"{frame_time!r}")
     dofs = r.items(c["dofs"], at + ("dofs",), "DOF names")
     if tuple(dofs) != skeleton.dof_names:
         r.fail(at + ("dofs",), f"must list the skeleton's {skeleton.n_dofs} DOFs in its order: "
@@ -93,13 +96,38 @@ def read_clip(r: _Reader, value, skeleton: Skeleton) -> Clip:
         here = at + ("frames", i)
         f = r.mapping(frame, here, _CLIP_FRAME_KEYS)
         root = r.name(f["root"], here + ("root",))
-        if root not in skeleton.frame_names:
+        if root not in skeleton.joint_names and root not in skeleton.site_names:
             r.fail(here + ("root",), f"unknown root {show_value(root)}; valid: any joint or site, "
                                      f"{choices(skeleton.joint_names + skeleton.site_names)}")
         roots.append(root)
         W[i] = _read_transform(r, f["world_from_root"], here + ("world_from_root",))
         q[i] = r.vector(f["angles"], skeleton.n_dofs, here + ("angles",))
     return Clip(name, Motion(skeleton, q, tuple(roots), W, frame_time))
+
+
+def check_clip_frames(motion: Motion, skeleton: Skeleton) -> None:
+    """PoseError for the first frame of ``motion`` that :func:`read_clip` would refuse for ``skeleton`` (its root
+    not a joint or site, a non-finite number, a root placed beyond ``MAX_COORDINATE``, a transform that is not a
+    rotation), checked over all frames at once, in the reader's words."""
+    valid = set(skeleton.joint_names) | set(skeleton.site_names)
+    W, R = motion.world_from_root, motion.world_from_root[:, :3, :3]
+    with np.errstate(all="ignore"):
+        bad_root = np.array([r not in valid for r in motion.roots])
+        finite = np.isfinite(W[:, :3]).all(axis=(1, 2)) & np.isfinite(motion.q).all(axis=1)
+        far = np.abs(W[:, :3, 3]).max(axis=1) > MAX_COORDINATE
+        skew = np.abs(np.transpose(R, (0, 2, 1)) @ R - np.eye(3)).max(axis=(1, 2)) > ROTATION_TOLERANCE
+        not_rotation = skew | (np.linalg.det(R) < 0.0)
+    problems = [(bad_root, "root", lambda k: f"unknown root {show_value(motion.roots[k])}; valid: any joint or "
+                                             f"site, {choices(skeleton.joint_names + skeleton.site_names)}"),
+                (~finite, "", lambda k: "holds a number that is not finite"),
+                (finite & far, "world_from_root", lambda k: f"must place the root within {MAX_COORDINATE:g} m of "
+                                                            f"the origin, got {W[k, :3, 3].tolist()}"),
+                (finite & not_rotation, "world_from_root", lambda k: "the first three columns must be a rotation "
+                 f"(orthonormal within {ROTATION_TOLERANCE:g}, determinant +1), got {R[k].tolist()}")]
+    for mask, field, text in problems:
+        if mask.any():
+            k = int(np.argmax(mask))
+            raise PoseError(f"{'.'.join(filter(None, (_CLIP_KEY, 'frames', str(k), field)))}: {text(k)}")
 
 
 def _read_transform(r: _Reader, value, path: tuple) -> np.ndarray:

@@ -8,8 +8,10 @@ from collections.abc import Mapping, Sequence
 from gsik.errors import PoseError
 from gsik.io.files import atomic_write_text
 from gsik.io.pose.model import _LIBRARY_KEY, POSE_FORMAT, Clip, KeySequence, Pole, Pose
-from gsik.io.pose.sequence import clip_lines, keys_lines, num as _num, num_list as _list, poles_lines
+from gsik.anim.motion import Motion
+from gsik.io.pose.sequence import check_clip_frames, clip_lines, keys_lines, num as _num, num_list as _list, poles_lines
 from gsik.io.yaml_safe import MAX_CHARS, MAX_VALUES, load_yaml, yaml_string
+from gsik.skeleton import Skeleton
 
 
 def _pose_lines(pose: Pose, indent: str) -> list[str]:
@@ -38,13 +40,18 @@ def _pose_lines(pose: Pose, indent: str) -> list[str]:
 
 
 def pose_to_yaml(pose: Pose, library: Sequence[tuple[str, Pose]] = (), keys: KeySequence | None = None,
-                 poles: Mapping[str, Pole] | None = None, clip: Clip | None = None) -> str:
+                 poles: Mapping[str, Pole] | None = None, clip: Clip | None = None,
+                 skeleton: Skeleton | None = None) -> str:
     """The YAML text of ``pose`` (the format of :mod:`gsik.io.pose`), with what else the file keeps, if any:
     a ``library`` list of named poses, a ``keys`` sequence, ``poles`` and a ``clip``.
 
+    The text is read back before it is returned, so gsik never writes a file it would refuse: with ``skeleton``
+    (or the clip's) in full, as :func:`gsik.io.pose.pose_from_yaml` reads it; without one, a long text through the
+    bounded YAML reader.
+
     Raises:
-        PoseError: a library pose, key or clip is for another skeleton, or the text would be longer than the
-            bounded reader reads back (:data:`gsik.io.yaml_safe.MAX_CHARS`: a clip of too many frames).
+        PoseError: a library pose, key or clip is for another skeleton, or the text would not read back (longer
+            than :data:`gsik.io.yaml_safe.MAX_CHARS`: a clip of too many frames; a value the reader refuses).
     """
     out = [
         "# gsik pose (format: gsik/io/pose/__init__.py); angles [rad], lengths [m], quaternions (w, x, y, z)",
@@ -63,11 +70,30 @@ def pose_to_yaml(pose: Pose, library: Sequence[tuple[str, Pose]] = (), keys: Key
     if keys is not None:
         out += keys_lines(keys, _pose_lines)
     out += poles_lines(poles or {})
-    if clip is not None:
-        out += clip_lines(clip)
-    text = "\n".join(out) + "\n"
+    text = "\n".join(out + (clip_lines(clip) if clip is not None else [])) + "\n"
     _check_readable(text, clip)
+    skeleton = skeleton if skeleton is not None else clip.motion.skeleton if clip is not None else None
+    if skeleton is not None:
+        _check_round_trip(out, clip, skeleton)
     return text
+
+
+def _check_round_trip(lines: list[str], clip: Clip | None, skeleton: Skeleton) -> None:
+    """PoseError unless :func:`gsik.io.pose.pose_from_yaml` reads the file for ``skeleton``: every block but the
+    clip's frames read back as written (``lines``), the clip with its first frame only, and every frame's values
+    checked as the reader checks them (:func:`gsik.io.pose.sequence.check_clip_frames`), in one pass over arrays:
+    reading a long clip back would take seconds."""
+    from gsik.io.pose.read import pose_from_yaml  # read imports this module's neighbours: late, to avoid a cycle
+
+    try:
+        if clip is not None:
+            check_clip_frames(clip.motion, skeleton)
+            m = clip.motion
+            first = Clip(clip.name, Motion(m.skeleton, m.q[:1], m.roots[:1], m.world_from_root[:1], m.frame_time))
+            lines = lines + clip_lines(first)
+        pose_from_yaml("\n".join(lines) + "\n", skeleton, "the pose file")
+    except PoseError as exc:
+        raise PoseError(f"gsik would not read this pose file back ({exc}); nothing was written") from None
 
 
 def _check_readable(text: str, clip: Clip | None) -> None:
@@ -94,7 +120,7 @@ def _check_skeletons(skeleton: str, keys: KeySequence | None, clip: Clip | None)
 
 def write_pose(path: str | os.PathLike, pose: Pose, library: Sequence[tuple[str, Pose]] = (),
                keys: KeySequence | None = None, poles: Mapping[str, Pole] | None = None,
-               clip: Clip | None = None) -> None:
+               clip: Clip | None = None, skeleton: Skeleton | None = None) -> None:
     """Write ``pose`` (and a ``library``, ``keys``, ``poles``, ``clip``, if any: see :func:`pose_to_yaml`) to
     ``path`` atomically (temporary file, fsync, rename).
 
@@ -104,4 +130,4 @@ def write_pose(path: str | os.PathLike, pose: Pose, library: Sequence[tuple[str,
     """
     if not isinstance(pose, Pose):
         raise PoseError(f"write_pose needs a Pose, got {type(pose).__name__}")
-    atomic_write_text(path, pose_to_yaml(pose, library, keys, poles, clip))
+    atomic_write_text(path, pose_to_yaml(pose, library, keys, poles, clip, skeleton))
