@@ -101,7 +101,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.body = BodyView(self.viewport)
         self.balance_view = BalanceView(doc, self.body.overlay)
         self.viewport.layers.append(self.balance_view)
-        self.poles = PoleGizmos(self.viewport)
+        self.poles = PoleGizmos(self.viewport, self.body.overlay)
         self.joints = JointEditor(doc)
         self.rings = JointRings(self.viewport, self.joints)
         self.joint_highlight = JointHighlight(self.viewport, self.joints, self.body.overlay)
