@@ -128,7 +128,7 @@ class MainWindow(QtWidgets.QMainWindow):
             setattr(self, f"act_{name}", action)
         self.act_views = {n: actions[f"view_{n}"] for n, _ in VIEW_KEYS}
         self.act_scenarios = animations.scenarios_action(self.scenario_menu)
-        menus = {"recent": self.files.recent_menu, "scenarios": self.scenario_menu}
+        menus = {"recent": self.files.recent_menu, "scenarios": self.scenario_menu, "new_skeleton": self.files.new_menu}
         make_menus(self, actions, menus)
         self.toolbar = make_toolbar(self, actions, menus)
 
