@@ -23,7 +23,7 @@ from gsik import balance, control
 from gsik.rotations import transform
 from gsik.targets import Target
 from gsik_studio.model.events import Signal
-from gsik_studio.model.pole_places import aim_point, limb_of, rest_place
+from gsik_studio.model.pole_places import aim_point, limbs, rest_place
 from gsik_studio.model.posture import Posture
 
 PINNED = 0  #: priority level of a pinned target
@@ -95,12 +95,13 @@ class SolveControls:
         self.posture = Posture(solver)  # natural (the bundled prior) when there is one
         self._poles: dict[str, Target] = {}  # every pole placed so far, enabled or not
         self._aimed: dict[str, np.ndarray] = {}  # the aims last handed to the solver
+        self._limbs = limbs(solver.skeleton, POLE_JOINTS)  # the pole joints this skeleton has
         self.changed = Signal()
 
     @property
     def pole_joints(self) -> tuple[str, ...]:
-        """The joints of :data:`POLE_JOINTS` this skeleton has."""
-        return tuple(n for n in POLE_JOINTS if n in self._solver.skeleton.joint_names)
+        """The joints of :data:`POLE_JOINTS` this skeleton has (each the middle joint of a limb)."""
+        return tuple(self._limbs)
 
     @property
     def poles(self) -> dict[str, Target]:
@@ -111,8 +112,7 @@ class SolveControls:
         """``{joint: Target}`` the solver gets for the enabled poles: each aims its joint at the point of the limb's
         swing nearest the pole (:func:`gsik_studio.model.pole_places.aim_point`)."""
         P = self._solver.world_positions()
-        aims = {n: t.replace(position=aim_point(limb_of(self._solver.skeleton, n), P, t.position))
-                for n, t in self.poles.items()}
+        aims = {n: t.replace(position=aim_point(self._limbs[n], P, t.position)) for n, t in self.poles.items()}
         self._aimed = {n: np.array(t.position) for n, t in aims.items()}
         return aims
 
@@ -121,9 +121,8 @@ class SolveControls:
         if not self._aimed:
             return
         P = self._solver.world_positions()
-        sk = self._solver.skeleton
         for n, t in self.poles.items():
-            if np.linalg.norm(aim_point(limb_of(sk, n), P, t.position) - self._aimed[n]) > AIM_TOLERANCE:
+            if np.linalg.norm(aim_point(self._limbs[n], P, t.position) - self._aimed[n]) > AIM_TOLERANCE:
                 self._push()
                 return
 

@@ -62,6 +62,17 @@ def limb_of(skeleton: gsik.Skeleton, joint: str) -> Limb:
     return Limb(int(sk.joint_frame[sk.joint_parent[j]]), frame, (children or sites)[0], int(sk.dof_frame[dof]), flex)
 
 
+def limbs(skeleton: gsik.Skeleton, joints) -> dict[str, Limb]:
+    """``{joint: Limb}`` of the ``joints`` (names) that ``skeleton`` has as the middle joints of limbs, in order."""
+    out = {}
+    for name in joints:
+        try:
+            out[name] = limb_of(skeleton, name)
+        except gsik.TargetError:
+            continue
+    return out
+
+
 def bend_direction(limb: Limb, P: np.ndarray, R: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Unit vector (3,): the way the limb's joint sticks out from the line between the limb's ends.
 

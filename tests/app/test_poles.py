@@ -8,7 +8,7 @@ from hypothesis import given, settings, strategies as st
 
 import gsik
 from gsik_studio.model import Document
-from gsik_studio.model.pole_places import POLE_DISTANCE, aim_point, limb_of, rest_place, swing_angle
+from gsik_studio.model.pole_places import POLE_DISTANCE, aim_point, limb_of, limbs, rest_place, swing_angle
 
 POLE_JOINTS = {"left_knee", "right_knee", "left_elbow", "right_elbow"}
 
@@ -184,3 +184,20 @@ def test_rest_place_is_where_the_limb_bends_even_when_it_is_straight():
 
 
 _BIPED = gsik.load_skeleton("biped")
+
+
+def test_only_the_middle_joints_of_limbs_get_poles():
+    sk = gsik.skeleton_from_yaml("""
+name: stick
+root: foot
+effectors: [foot, hand]
+joints:
+  - {name: hips, offset: [0, 0, 1]}
+  - {name: left_knee, parent: hips, offset: [0, 0, -0.5]}
+  - {name: left_elbow, parent: hips, offset: [0, 0, 0.3], rotations: [{axis: x, limits: [0, 2]}]}
+sites:
+  - {name: foot, parent: left_knee, offset: [0, 0, -0.5]}
+  - {name: hand, parent: left_elbow, offset: [0, 0, 0.3]}
+""")
+    assert limbs(sk, POLE_JOINTS) == {"left_elbow": limb_of(sk, "left_elbow")}  # the knee has no DOF
+    assert Document(sk).controls.pole_joints == ("left_elbow",)
