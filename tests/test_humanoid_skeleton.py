@@ -95,3 +95,14 @@ def test_the_biped_without_wrists_turns_its_body_for_the_same_hand_target():
     result, solver, R0, _, turned = _turn_a_hand(biped, 45.0)
     f = biped.frame_of("waist.z")
     assert angle_between(solver.world_rotations()[f], R0[f]) > np.radians(20.0)  # what the humanoid is for
+
+
+def test_the_built_in_scenarios_fit_the_humanoid_its_spine_sharing_the_biped_s_waist(humanoid):
+    from gsik.anim.scenarios import SCENARIO_NAMES, builtin_scenario
+
+    biped = gsik.load_skeleton("biped")
+    assert len({builtin_scenario(humanoid, n).name for n in SCENARIO_NAMES}) == len(SCENARIO_NAMES)
+    twist, biped_twist = builtin_scenario(humanoid, "twist"), builtin_scenario(biped, "twist")
+    # The same targets on both: the humanoid's waist and chest turn together as far as the biped's waist.
+    np.testing.assert_allclose(twist.positions, biped_twist.positions, atol=1e-9)
+    np.testing.assert_allclose(twist.rotations, biped_twist.rotations, atol=1e-9)
