@@ -89,7 +89,7 @@ ACTIONS: tuple[ActionSpec, ...] = (
 
 #: Menus: (title, entries); an entry names an action or a submenu, None is a separator.
 MENUS = (
-    ("&File", ("new", "open", "recent", None, "save", "save_as", None, "import_clip", "import_skeleton",
+    ("&File", ("new", "new_skeleton", "open", "recent", None, "save", "save_as", None, "import_clip", "import_skeleton",
                "import_skeleton_window", "export_bvh", None, "screenshot", None, "quit")),
     ("&Edit", ("undo", "redo")),
     ("&Pose", ("root_left", "root_right", None, "reset", "random", "mirror_lr", "mirror_rl", "walk", "scenarios")),

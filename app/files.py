@@ -40,6 +40,11 @@ class FileActions:
         self._open_document, self._show_document = open_document, show_document
         self.recent_menu = QtWidgets.QMenu("Open &Recent", parent)
         self.update_recent_menu()
+        self.new_menu = QtWidgets.QMenu("New on s&keleton", parent)  # one entry per bundled skeleton
+        for name in gsik.bundled_skeletons():
+            a = self.new_menu.addAction(f"{name} ({gsik.load_skeleton(name).n_dofs} DOF)")
+            a.setStatusTip(f"A new document on the bundled {name}, standing")
+            a.triggered.connect(lambda _c=False, n=name: self.new_on_skeleton(n))
 
     def confirm_discard(self, action: str) -> bool:
         """Ask before ``action`` throws away unsaved changes; True to go on."""
@@ -63,6 +68,11 @@ class FileActions:
         if self.confirm_discard("start a new pose"):
             self._stop_playback()
             self.doc.new()
+
+    def new_on_skeleton(self, name: str) -> bool:
+        """A new document on the bundled skeleton ``name`` in this window, standing (asking first about unsaved
+        changes); False on a "Cancel"."""
+        return self._show_new(transfer.document_for(gsik.load_skeleton(name)), False, "start a new pose") is True
 
     def open_dialog(self) -> bool:
         if not self.confirm_discard("open another pose"):

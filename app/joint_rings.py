@@ -119,7 +119,7 @@ class JointRings(QtCore.QObject):
         """What a press at display point ``xy`` grabs: ``("ring", dof)``, ``("joint", name)`` or None."""
         doc = self.viewport.doc
         targets = [t.position for t in doc.targets.values() if t.enabled]
-        targets += [t.position for t in doc.controls.poles.values()]  # pole gizmos sit on knees and elbows
+        targets += [t.position for t in doc.controls.poles.values()]  # a press on a pole is the pole's
         if targets and np.min(np.linalg.norm(self.project(np.array(targets)) - xy, axis=1)) <= TARGET_GUARD_PX:
             return None
         _, _, rings = self.ring_world()

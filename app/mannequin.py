@@ -6,8 +6,8 @@ is one ``einsum`` writing world coordinates into the PolyData's own arrays
 (no mesh is rebuilt, see /work/shared/VIEWPORT.md). Capsules and boxes are two
 PolyData with one template each, so each updates with one vectorised product.
 
-The biped's segments get hand-set sizes (:data:`SEGMENT_SIZES`); bones of any
-other skeleton are capsules whose radius follows their length.
+The bundled skeletons' segments get hand-set sizes (:data:`SEGMENT_SIZES`); bones
+of any other skeleton are capsules whose radius follows their length.
 """
 
 from __future__ import annotations
@@ -27,19 +27,26 @@ LEFT_COLOR = (0.60, 0.67, 0.78)  # the left side tinted, so a side view says whi
 AROUND = 18  # vertices around a capsule
 CAP_RINGS = 5  # rings per hemisphere
 
-#: ``{segment name: ("capsule", radius [m]) or ("box", half width [m], half depth [m])}`` for the biped.
+#: ``{segment name: ("capsule", radius [m]) or ("box", half width [m], half depth [m])}`` for the bundled
+#: skeletons (``left_``/``right_`` dropped): the biped's, and the humanoid's trunk in two parts, clavicles, hands.
 SEGMENT_SIZES = {
     "pelvis": ("capsule", 0.075),
     "torso": ("box", 0.13, 0.085),
+    "abdomen": ("box", 0.115, 0.08),
+    "thorax": ("box", 0.13, 0.085),
+    "clavicle": ("capsule", 0.045),
     "neck": ("capsule", 0.045),
     "head": ("capsule", 0.085),
     "upper_arm": ("capsule", 0.044),
     "forearm": ("capsule", 0.036),
+    "hand": ("box", 0.014, 0.04),  # flat: the palm faces the thigh (the carrier's x)
     "thigh": ("capsule", 0.065),
     "shin": ("capsule", 0.048),
     "foot": ("box", 0.042, 0.028),
 }
-#: The torso's box spans the spine bone only; its shoulder bones are capsules this thick [m].
+#: The skeletons whose segments :data:`SEGMENT_SIZES` sizes.
+SIZED_SKELETONS = ("biped", "humanoid")
+#: A box spans its segment's first bone only (the spine of a torso); the others are capsules this thick [m].
 SHOULDER_RADIUS = 0.05
 
 
@@ -76,13 +83,13 @@ def _carrier(sk: gsik.Skeleton, a: int, b: int) -> int:
 
 
 def _size(sk: gsik.Skeleton, bone: int, length: float) -> tuple[str, tuple[float, ...]]:
-    seg = sk.segment_names[sk.bone_segment[bone]]
+    segment = sk.bone_segment[bone]
+    seg = sk.segment_names[segment]
     key = seg.split("_", 1)[1] if seg.startswith(("left_", "right_")) else seg
-    spec = SEGMENT_SIZES.get(key) if sk.name == "biped" else None
+    spec = SEGMENT_SIZES.get(key) if sk.name in SIZED_SKELETONS else None
     if spec is None:
         return "capsule", (float(np.clip(0.14 * length, 0.02, 0.07)),)
-    a, b = sk.bone_frames[bone]
-    if key == "torso" and not ("waist" in sk.frame_names[a] or "waist" in sk.frame_names[b]):
+    if spec[0] == "box" and bone != int(np.flatnonzero(sk.bone_segment == segment)[0]):
         return "capsule", (SHOULDER_RADIUS,)
     return spec[0], tuple(spec[1:])
 

@@ -101,7 +101,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.body = BodyView(self.viewport)
         self.balance_view = BalanceView(doc, self.body.overlay)
         self.viewport.layers.append(self.balance_view)
-        self.poles = PoleGizmos(self.viewport)
+        self.poles = PoleGizmos(self.viewport, self.body.overlay)
         self.joints = JointEditor(doc)
         self.rings = JointRings(self.viewport, self.joints)
         self.joint_highlight = JointHighlight(self.viewport, self.joints, self.body.overlay)
@@ -128,7 +128,7 @@ class MainWindow(QtWidgets.QMainWindow):
             setattr(self, f"act_{name}", action)
         self.act_views = {n: actions[f"view_{n}"] for n, _ in VIEW_KEYS}
         self.act_scenarios = animations.scenarios_action(self.scenario_menu)
-        menus = {"recent": self.files.recent_menu, "scenarios": self.scenario_menu}
+        menus = {"recent": self.files.recent_menu, "scenarios": self.scenario_menu, "new_skeleton": self.files.new_menu}
         make_menus(self, actions, menus)
         self.toolbar = make_toolbar(self, actions, menus)
 

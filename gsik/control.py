@@ -138,6 +138,8 @@ class Controller:
         self._root = skeleton.frame_of(skeleton.root)
         self._state_cache = None  # (q, world_from_root, LevelState) of the last accepted pose
         self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
+        self._rest_damping = False  # True: the next step starts from the base damping (new targets for a held pose)
+        self._last_held = False  # the last step held the pose
         self._layout = None  # (effector names, result names, task index of each) for results
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
@@ -179,6 +181,8 @@ class Controller:
             self._row_w = row_w
             self._thresholds()
         self._state_cache = self._held = None
+        # A held pose's damping (up to MAX_DAMPING) was learnt on the old targets: new ones start afresh.
+        self._rest_damping = self._last_held
 
     def _thresholds(self) -> None:
         """What depends on the row weights only: each level's rows, the error bounds (2, m) of the band and of
@@ -303,6 +307,8 @@ class Controller:
         ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
         """
         s = self._settings
+        if self._rest_damping:
+            lam[0], self._rest_damping = s.damping, False
         damping = lam[0] if s.adaptive_damping else s.damping
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
@@ -324,6 +330,7 @@ class Controller:
                                        or (not accepted and damping >= MAX_DAMPING))
         stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm)
         self._held = (q.copy(), W.copy(), lam[0], stats) if held and not accepted else None
+        self._last_held = held
         return stats
 
     def _holds(self, q, W, damping) -> bool:

@@ -59,8 +59,7 @@ class Document:
         needs_solving: True until a step converges or QUIET_FRAMES steps in a row settle (as ``gsik scenarios``).
     """
 
-    #: Effectors whose targets start position-only: the biped's arms have no
-    #: wrist, so a full 6-DOF hand target would fight the rest of the body.
+    #: Effectors whose targets start position-only (without wrists, as the biped's, a turned hand turns the body).
     POSITION_ONLY_BY_DEFAULT = ("left_hand", "right_hand")
 
     def __init__(self, skeleton: gsik.Skeleton | str = "biped", **settings):
@@ -160,8 +159,8 @@ class Document:
         self.last_result = None
 
     def _push_targets(self) -> None:
-        """Hand the targets and the pole targets to the solver (it skips the disabled ones)."""
-        self.solver.set_targets({**self._targets, **self.controls.poles})
+        """Hand the targets and the poles' aims to the solver (it skips the disabled ones)."""
+        self.solver.set_targets({**self._targets, **self.controls.pole_aims()})
         self.needs_solving = True
 
     def _snapped_targets(self) -> dict[str, Target]:
@@ -331,9 +330,9 @@ class Document:
         self._edit(text, apply, None if drag is None else ("angles", text, drag))
 
     def reset(self) -> None:
-        """Back to the standing pose on the default root; effector flags are kept."""
-        self.set_pose(standing_pose(self.skeleton, self._targets, self.POSITION_ONLY_BY_DEFAULT),
-                      "Reset to standing pose")
+        """Back to the standing pose on the default root, poles at their rest places; effector flags are kept."""
+        pose = standing_pose(self.skeleton, self._targets, self.POSITION_ONLY_BY_DEFAULT)
+        self._edit("Reset to standing pose", lambda: (self._restore(pose), self.controls.poles_to_rest()))
 
     def random_pose(self, seed: int | None = None, amount: float = 0.35) -> None:
         """A random pose: every angle moved from rest by up to ``amount`` of the way to its limits."""
@@ -384,6 +383,7 @@ class Document:
     # -- solver ----------------------------------------------------------------
     def step(self) -> gsik.SolveResult:
         """One solver frame; afterwards :attr:`needs_solving` says whether more frames would help."""
+        self.controls.aim_poles()  # the limbs' ends moved: the poles aim anew
         t0 = time.perf_counter()
         result = self.solver.step()
         self.last_solve_time = time.perf_counter() - t0

@@ -23,6 +23,7 @@ from gsik import balance, control
 from gsik.rotations import transform
 from gsik.targets import Target
 from gsik_studio.model.events import Signal
+from gsik_studio.model.pole_places import aim_point, limbs, rest_place
 from gsik_studio.model.posture import Posture
 
 PINNED = 0  #: priority level of a pinned target
@@ -32,6 +33,8 @@ POLE = 2  #: priority level of a pole target: it only bends a limb in what the t
 POLE_JOINTS = ("left_knee", "right_knee", "left_elbow", "right_elbow")
 #: Effectors pinned in a new document: pulling a hand never moves them unless unpinned.
 PINNED_BY_DEFAULT = ("left_foot", "right_foot", "pelvis")
+#: A pole's aim is handed to the solver again once the limb has moved it this far [m] (far below the tolerance).
+AIM_TOLERANCE = 1e-5
 
 
 def is_pinned(t: Target) -> bool:
@@ -69,9 +72,11 @@ class SolveControls:
     and support read-outs.
 
     Pole targets are position-only targets on knees and elbows at level
-    :data:`POLE`: dragging one swings the limb's bend towards it without moving
-    any hand or foot. Unlike the posture and balance they are document state:
-    every change is one undo step, and pose files keep them.
+    :data:`POLE`, resting out in front of the knees and behind the elbows; the
+    solver aims each joint at the point of its swing nearest the pole
+    (:mod:`gsik_studio.model.pole_places`), so dragging one swings the limb's
+    bend towards it without moving any hand or foot. Unlike the posture and
+    balance they are document state: every change is one undo step, and pose files keep them.
 
     Args:
         solver: The document's solver.
@@ -89,38 +94,67 @@ class SolveControls:
         self._edit = edit
         self.posture = Posture(solver)  # natural (the bundled prior) when there is one
         self._poles: dict[str, Target] = {}  # every pole placed so far, enabled or not
+        self._aimed: dict[str, np.ndarray] = {}  # the aims last handed to the solver
+        self._limbs = limbs(solver.skeleton, POLE_JOINTS)  # the pole joints this skeleton has
         self.changed = Signal()
 
     @property
     def pole_joints(self) -> tuple[str, ...]:
-        """The joints of :data:`POLE_JOINTS` this skeleton has."""
-        return tuple(n for n in POLE_JOINTS if n in self._solver.skeleton.joint_names)
+        """The joints of :data:`POLE_JOINTS` this skeleton has (each the middle joint of a limb)."""
+        return tuple(self._limbs)
 
     @property
     def poles(self) -> dict[str, Target]:
         """``{joint: Target}`` of the enabled pole targets (a new dict)."""
         return {n: t for n, t in self._poles.items() if t.enabled}
 
+    def pole_aims(self) -> dict[str, Target]:
+        """``{joint: Target}`` the solver gets for the enabled poles: each aims its joint at the point of the limb's
+        swing nearest the pole (:func:`gsik_studio.model.pole_places.aim_point`)."""
+        P = self._solver.world_positions()
+        aims = {n: t.replace(position=aim_point(self._limbs[n], P, t.position)) for n, t in self.poles.items()}
+        self._aimed = {n: np.array(t.position) for n, t in aims.items()}
+        return aims
+
+    def aim_poles(self) -> None:
+        """Before a solver step: hand the poles' aims to the solver again if the limbs moved them (the ends moved)."""
+        if not self._aimed:
+            return
+        P = self._solver.world_positions()
+        for n, t in self.poles.items():
+            if np.linalg.norm(aim_point(self._limbs[n], P, t.position) - self._aimed[n]) > AIM_TOLERANCE:
+                self._push()
+                return
+
     def joint_position(self, joint: str) -> np.ndarray:
         """World position (3,) [m] of a joint now."""
         sk = self._solver.skeleton
         return self._solver.world_positions()[sk.joint_frame[sk.joint_names.index(joint)]]
 
-    def _pole_on_joint(self, joint: str) -> Target:
-        return Target(self.joint_position(joint), position_only=True, priority=POLE)
+    def _pole_at_rest(self, joint: str) -> Target:
+        """A pole target for ``joint`` at its rest place for the pose now (the joint already points at it)."""
+        s = self._solver
+        return Target(rest_place(s.skeleton, joint, s.world_positions(), s.world_rotations()),
+                      position_only=True, priority=POLE)
 
     def set_poles(self, on: bool) -> None:
-        """Turn every pole target on (each placed on its joint, so nothing moves yet) or off: one undo step."""
-        new = ({n: self._pole_on_joint(n) for n in self.pole_joints} if on
+        """Turn every pole target on (each at its rest place, so nothing moves yet) or off: one undo step."""
+        new = ({n: self._pole_at_rest(n) for n in self.pole_joints} if on
                else {n: t.replace(enabled=False) for n, t in self._poles.items()})
         if new != self._poles:
             self._change("Pole targets on" if on else "Pole targets off", new)
 
+    def poles_to_rest(self) -> None:
+        """Put every enabled pole back at its rest place for the pose now (inside the caller's undo step: Reset)."""
+        if self.poles:
+            self._set_poles({n: self._pole_at_rest(n) if t.enabled else t for n, t in self._poles.items()})
+            self.changed.emit()
+
     def set_pole_enabled(self, joint: str, on: bool) -> None:
-        """Turn one pole target on (placed on its joint when it had none yet) or off: one undo step."""
+        """Turn one pole target on (at its rest place when it had none yet) or off: one undo step."""
         if joint not in self.pole_joints:
             raise gsik.TargetError(f"no pole target on {joint!r}; pole joints: {', '.join(self.pole_joints) or 'none'}")
-        old = self._poles.get(joint) or self._pole_on_joint(joint).replace(enabled=False)
+        old = self._poles.get(joint) or self._pole_at_rest(joint).replace(enabled=False)
         if old.enabled != bool(on):
             self._change(f"Pole {joint} {'on' if on else 'off'}", {**self._poles, joint: old.replace(enabled=bool(on))})
 

@@ -4,8 +4,10 @@ Plain Python. A skeleton with a pose prior bundled for it (the biped's
 ``skeletons/biped_prior.npz``, learned from real motion capture, see
 :mod:`gsik.prior`) starts natural: among the poses that meet the targets the
 solver prefers the likeliest human one. The artist can fall back to the plain
-rest pose; a skeleton without a prior has only the rest pose. Either way the
-posture is the lowest priority level, so it never costs target accuracy.
+rest pose; a skeleton without a prior has only the rest pose (a bundled one,
+such as the humanoid, starts with it; an imported one starts with none: the
+plain solver). Either way the posture is the lowest priority level, so it
+never costs target accuracy.
 
 Like the posture strength it is solver state (remembered by the studio's
 settings, not saved in pose files, not undone).
@@ -19,7 +21,7 @@ import gsik
 from gsik.prior import PosePrior, bundled_prior, use_prior
 
 #: Posture strength a new document starts with: the prior's when one is bundled (as ``bench_prior.py``
-#: measures it), else off (the plain solver).
+#: measures it), the rest pose's for a bundled skeleton without a prior, else off (the plain solver).
 NATURAL_STRENGTH = 1.0
 
 
@@ -49,7 +51,8 @@ class Posture:
         self._solver = solver
         self.prior = prior_for(solver.skeleton)
         self.natural = self.prior is not None
-        self.strength = NATURAL_STRENGTH if self.natural else 0.0
+        bundled = solver.skeleton.name in gsik.bundled_skeletons()
+        self.strength = NATURAL_STRENGTH if self.natural or bundled else 0.0
         self._apply()
 
     @property

@@ -36,7 +36,7 @@ def balance_panel(doc: Document, settings: QtCore.QSettings, show_support: Calla
         box.setEnabled(controls.has_masses)
         form.layout().addRow(box)
     form.poles = QtWidgets.QCheckBox("Pole targets for knees and elbows")
-    form.poles.setToolTip("Small violet spheres on the knees and elbows: drag one to swing the limb's bend, "
+    form.poles.setToolTip("Violet spheres in front of the knees and behind the elbows: drag one to swing the limb's bend, "
                           "below every other target (a hand or foot never moves for it)")
     form.poles.setEnabled(bool(controls.pole_joints))
     form.poles.toggled.connect(controls.set_poles)

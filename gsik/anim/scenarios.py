@@ -269,8 +269,25 @@ def _impossible(skeleton: Skeleton) -> Scenario:
                     sk, effectors, P, R, W, reachable=False)
 
 
+def _split_spine(skeleton: Skeleton, pose: Mapping[str, float]) -> dict[str, float]:
+    """The biped's pose angles for ``skeleton``: on a two-joint spine (the humanoid's ``waist`` and ``chest``) each
+    waist angle is shared between the two joints, in proportion to their ranges on its side."""
+    if not all(f"chest.{a}" in skeleton.dof_names for a in "xyz"):
+        return dict(pose)
+    out = dict(pose)
+    for a in "xyz":
+        if f"waist.{a}" not in out:
+            continue
+        v = out[f"waist.{a}"]
+        w, c = skeleton.dof_index(f"waist.{a}"), skeleton.dof_index(f"chest.{a}")
+        room_w, room_c = (skeleton.upper[w], skeleton.upper[c]) if v > 0 else (skeleton.lower[w], skeleton.lower[c])
+        share = room_w / (room_w + room_c) if room_w + room_c else 0.5
+        out[f"waist.{a}"], out[f"chest.{a}"] = v * share, v * (1.0 - share)
+    return out
+
+
 def builtin_scenario(skeleton: Skeleton, name: str) -> Scenario:
-    """One of :data:`SCENARIO_NAMES` for the biped.
+    """One of :data:`SCENARIO_NAMES` for the biped (or a skeleton with its joints: the humanoid).
 
     Raises:
         ScenarioError: an unknown name (listing the valid ones), or a skeleton
@@ -290,7 +307,8 @@ def builtin_scenario(skeleton: Skeleton, name: str) -> Scenario:
     if name == "impossible":
         return _impossible(skeleton)
     description, pose = _BIPED_POSES[name]
-    return scenario_from_angles(skeleton, name, description, angles(skeleton, pose), "right_foot")
+    return scenario_from_angles(skeleton, name, description, angles(skeleton, _split_spine(skeleton, pose)),
+                                "right_foot")
 
 
 def builtin_scenarios(skeleton: Skeleton) -> tuple[Scenario, ...]:

@@ -246,20 +246,98 @@ def test_screenshot_shows_mannequin_pins_and_centre_of_mass(window, qtbot, tmp_p
     assert img.save(str(path))
 
 
-def test_a_pole_gizmo_dragged_with_the_mouse_swings_the_knee(window, qtbot):
+def _poles_on_crouched(window, qtbot):
+    """Crouch 8 cm (the knees bend), then tick "Pole targets" with the mouse and let the pose settle."""
     doc = window.doc
-    doc.move_target("pelvis", doc.targets["pelvis"].position + (0.0, 0.0, -0.08))  # crouch: the knees bend
+    doc.move_target("pelvis", doc.targets["pelvis"].position + (0.0, 0.0, -0.08))
     _settle(qtbot, window)
+    q = doc.q.copy()
     _click_widget(window.balance_panel.poles)
     assert set(doc.controls.poles) == {"left_knee", "right_knee", "left_elbow", "right_elbow"}
     assert all(w.GetEnabled() for w in window.poles.widgets.values())
     _settle(qtbot, window)
-    knee0 = doc.controls.joint_position("left_knee").copy()
+    np.testing.assert_allclose(doc.q, q, atol=1e-3)  # placed where the limbs point already: nothing moved
+
+
+def _violet_share(window, centre, radius):
+    """The share of the 3D view's pixels within 0.6 ``radius`` [m] of world point ``centre`` (3,) on screen that
+    are the poles' violet, lit or shaded (the mannequin's clay and the left side's blue-grey are not)."""
+    img = window.grab_window()
+    cam = window.plotter.camera
+    right = np.cross(np.array(cam.GetDirectionOfProjection()), np.array(cam.up))
+    c, edge = window.rings.project(np.array([centre, centre + radius * right / np.linalg.norm(right)]))
+    r_px = 0.6 * np.linalg.norm(edge - c)
+    ratio = img.devicePixelRatio()
+    violet = []
+    for dx, dy in ((x, y) for x in np.linspace(-1, 1, 5) for y in np.linspace(-1, 1, 5) if x * x + y * y <= 1):
+        p = window.plotter.mapTo(window, _qpoint(window, c + r_px * np.array([dx, dy])))
+        col = img.pixelColor(int(p.x() * ratio), int(p.y() * ratio))
+        violet.append(col.blue() - col.green() > 70 and col.red() - col.green() > 30)
+    return float(np.mean(violet))
+
+
+def test_pole_gizmos_rest_out_in_front_of_the_knees_behind_the_elbows_drawn_over_the_body(window, qtbot):
+    from gsik_studio.pole_gizmos import POLE_RADIUS
+
+    doc = window.doc
+    _poles_on_crouched(window, qtbot)
+    for joint, way in (("left_knee", 1.0), ("right_knee", 1.0), ("left_elbow", -1.0), ("right_elbow", -1.0)):
+        out = doc.controls.poles[joint].position - doc.controls.joint_position(joint)
+        assert np.linalg.norm(out) > 0.25 and way * out[1] > 0.6 * np.linalg.norm(out)  # the body faces +y
+    # Seen from behind, the knees' poles lie behind the legs, the elbows' in front of the body: all are drawn.
+    window.set_view("back")
+    for joint, pole in doc.controls.poles.items():
+        assert _violet_share(window, pole.position, POLE_RADIUS) > 0.6, joint
+    # The thigh above the knee is the mannequin's, not violet (the check above can fail).
+    thigh = (doc.controls.joint_position("left_knee") + doc.controls.joint_position("left_hip")) / 2
+    assert _violet_share(window, thigh, POLE_RADIUS) == 0.0
+
+
+def test_a_pole_gizmo_dragged_with_the_mouse_swings_the_knee(window, qtbot):
+    from gsik_studio.model.pole_places import limb_of, swing_angle
+
+    doc = window.doc
+    _poles_on_crouched(window, qtbot)
+    P0 = doc.world_positions()
+    pole = doc.controls.poles["left_knee"].position.copy()
     pelvis = doc.effector_poses()["pelvis"][:3, 3].copy()
-    xy = window.rings.project(doc.controls.poles["left_knee"].position[None])[0]
+    xy = window.rings.project(pole[None])[0]
     _press_drag_release(window, xy, xy + np.array([80.0, 0.0]))  # front view: +x on screen is the body's left
     assert window.joints.selected is None  # the pole widget took the press, not the rings
-    assert doc.controls.poles["left_knee"].position[0] < knee0[0] - 0.05
-    # The pole is the lowest level: the knee swings over a few dozen frames (slowly on a loaded machine).
-    wait_for(qtbot, lambda: doc.controls.joint_position("left_knee")[0] < knee0[0] - 0.02)
+    assert doc.controls.poles["left_knee"].position[0] < pole[0] - 0.05
+    assert [c.text for c in doc.history.commands][-1] == "Move pole left_knee"  # the drag: one undo step
+    # The pole is the lowest level: the knee swings (over a few dozen frames) and the pose settles.
+    _settle(qtbot, window)
+    P = doc.world_positions()
+    swing = np.degrees(swing_angle(limb_of(doc.skeleton, "left_knee"), P0, P))
+    assert swing < -10.0  # outwards, about the hip-ankle line (seen from above the hip: clockwise)
     assert np.linalg.norm(doc.effector_poses()["pelvis"][:3, 3] - pelvis) < 1e-3
+    for other in ("right_knee", "left_elbow", "right_elbow"):
+        assert abs(swing_angle(limb_of(doc.skeleton, other), P0, P)) < np.radians(1.0)
+
+
+def test_reset_puts_the_poles_back_in_front_of_the_knees_and_the_pose_settles(window, qtbot):
+    from gsik_studio.model import Document
+
+    doc = window.doc
+    standing = Document()  # the standing pose settled without poles: where Reset must come back to
+    while standing.needs_solving:
+        standing.step()
+    _poles_on_crouched(window, qtbot)
+    doc.controls.move_pole("left_knee", doc.controls.poles["left_knee"].position + (-0.3, 0.0, 0.0))
+    doc.controls.move_pole("right_elbow", doc.controls.poles["right_elbow"].position + (0.0, 0.3, 0.0))
+    _settle(qtbot, window)
+    n = len(doc.history.commands)
+    _click_widget(window.toolbar.widgetForAction(window.act_reset))
+    assert len(doc.history.commands) == n + 1 and doc.history.undo_text == "Reset to standing pose"
+    assert window.balance_panel.poles.isChecked()  # still on, back at their rest places
+    _settle(qtbot, window)
+    sk = doc.skeleton
+    for joint in doc.controls.poles:
+        out = doc.controls.poles[joint].position - doc.controls.joint_position(joint)
+        way = 1.0 if "knee" in joint else -1.0
+        assert way * out[1] > 0.9 * np.linalg.norm(out), joint  # straight in front of the knee, behind the elbow
+        hinge = sk.joint_dofs[sk.joint_names.index(joint)][0]
+        assert abs(doc.q[hinge] - standing.q[hinge]) < np.radians(3.0), joint  # bent as standing: no bent knee
+    # The poles hold the knees and elbows straight ahead; the natural posture alone turns them a few degrees.
+    np.testing.assert_allclose(doc.world_positions(), standing.world_positions(), atol=0.02)

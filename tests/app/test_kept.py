@@ -97,7 +97,8 @@ def test_pole_on_off_and_a_dragged_pole_are_each_one_undo_step(doc):
     assert "right_elbow" in c.poles and "right_elbow" in doc.solver.targets
     doc.undo()
     np.testing.assert_array_equal(c.poles["left_knee"].position, start)
-    np.testing.assert_array_equal(doc.solver.targets["left_knee"].position, start)
+    # The solver aims the knee at the point of its swing nearest the pole: at the pole's rest place, the knee itself.
+    np.testing.assert_allclose(doc.solver.targets["left_knee"].position, c.joint_position("left_knee"), atol=1e-9)
     doc.redo()
     np.testing.assert_array_equal(c.poles["left_knee"].position, start + (0.3, 0.0, 0.0))
     c.set_poles(False)
@@ -147,7 +148,7 @@ def test_save_and_open_keep_keys_poles_library_and_the_clip(doc, tmp_path):
     _same(kept_state(other), kept_state(doc))
     assert other.pose() == doc.pose() and not other.dirty and not other.history.can_undo
     assert "left_elbow" not in other.solver.targets and "left_knee" in other.solver.targets
-    np.testing.assert_array_equal(other.solver.targets["left_knee"].position, doc.controls.poles["left_knee"].position)
+    np.testing.assert_array_equal(other.solver.targets["left_knee"].position, doc.solver.targets["left_knee"].position)
     # A clip (and no keys) round-trips too, and the timeline plays it at its own frame time.
     clip_doc = Document()
     clip_doc.timeline.load(elbow_motion(clip_doc), "reach.bvh")
