@@ -24,6 +24,7 @@ File format (``.npz``, read without pickle): arrays ``mean`` (n,),
 
 from __future__ import annotations
 
+import io
 import os
 from dataclasses import dataclass
 from functools import cached_property
@@ -33,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from gsik.errors import GsikFileError, PriorError, choices
+from gsik.io.files import atomic_write_bytes
 from gsik.skeleton import Skeleton
 
 #: Smallest variance of any angle [rad^2] ((0.02 rad)^2, about 1 degree).
@@ -153,9 +155,10 @@ def training_poses(Q, skeleton: Skeleton, shrinkage: float | None, what: str) ->
     return Q, a
 
 
-def write_prior(prior: PosePrior, path: str | os.PathLike) -> None:
-    """Write ``prior`` as a ``.npz`` file (see the module docstring)."""
-    write_npz(path, "pose prior", format=FORMAT, skeleton=prior.skeleton, dof_names=prior.dof_names,
+def write_prior(prior: PosePrior, path: str | os.PathLike, follow_symlinks: bool = True) -> None:
+    """Write ``prior`` as a ``.npz`` file (see the module docstring), atomically
+    (:func:`gsik.io.files.atomic_write_bytes`; ``follow_symlinks=False`` refuses a link at ``path``)."""
+    write_npz(path, "pose prior", follow_symlinks, format=FORMAT, skeleton=prior.skeleton, dof_names=prior.dof_names,
               mean=prior.mean, covariance=prior.covariance, n_frames=prior.n_frames, shrinkage=prior.shrinkage,
               source=prior.source)
 
@@ -168,13 +171,11 @@ def read_prior(path: str | os.PathLike) -> PosePrior:
                      int(d["n_frames"]), float(d["shrinkage"]), str(d["source"]))
 
 
-def write_npz(path: str | os.PathLike, what: str, **arrays) -> None:
-    """Write ``arrays`` (names to arrays or scalars) as an ``.npz`` file; ``what`` names it in errors."""
-    try:
-        with open(path, "wb") as f:
-            np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()})
-    except OSError as e:
-        raise GsikFileError(f"cannot write {what} {path}: {e.strerror}") from None
+def write_npz(path: str | os.PathLike, what: str, follow_symlinks: bool = True, **arrays) -> None:
+    """Write ``arrays`` (names to arrays or scalars) as an ``.npz`` file atomically; ``what`` names it in errors."""
+    buffer = io.BytesIO()
+    np.savez(buffer, **{k: np.asarray(v) for k, v in arrays.items()})
+    atomic_write_bytes(path, buffer.getvalue(), follow_symlinks)  # GsikFileError names the path and the reason
 
 
 def read_npz(path: str | os.PathLike, what: str, format: int, needed: tuple[str, ...]) -> dict[str, np.ndarray]:
