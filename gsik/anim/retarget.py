@@ -309,7 +309,7 @@ class Retargeter:
                                    1.0 / clip.frame_time, height)
         points = asked.copy()
         points[:, feet] = pin_targets(asked[:, feet], contacts)
-        Q, got = self._solve(W, points, contacts, feet, progress)
+        Q, got = self._solve(W, points, contacts, progress)
         frames = [self.skeleton.frame_of(f) for f in self.mapping]
         err = np.linalg.norm(got[:, frames] - asked, axis=-1)
         slide = (planted_speed(asked[:, feet], contacts.planted, contacts.fps),
@@ -319,20 +319,19 @@ class Retargeter:
                           self.scale, self.up, height, contacts, slide,
                           self._degenerate(clip_points, height))
 
-    def _solve(self, W: np.ndarray, points: np.ndarray, contacts: Contacts, feet: list[int],
+    def _solve(self, W: np.ndarray, points: np.ndarray, contacts: Contacts,
                progress: Callable[[int], None] | None) -> tuple[np.ndarray, np.ndarray]:
         """Angles (n, n_dofs) and world positions (n, n_skeleton_frames, 3) [m] tracking ``points``; a foot point
-        in contact is at priority 0."""
+        in contact is at priority 0, the other point of that foot (the heel lifting off a planted toe) at 1."""
         tracked = [(k, f) for k, f in enumerate(self.mapping) if f != "pelvis"]
-        column = {k: c for c, k in enumerate(feet)}
         s = self.solver()
         n = len(points)
         Q = np.empty((n, self.skeleton.n_dofs))
         got = np.empty((n, self.skeleton.n_frames, 3))
         for i in range(n):
             s.set_world_from_root(W[i])
-            s.set_targets({f: Target(points[i, k], position_only=True,
-                                     priority=0 if k in column and contacts.planted[i, column[k]] else PRIORITIES[f])
+            level = _foot_levels(contacts, i)
+            s.set_targets({f: Target(points[i, k], position_only=True, priority=level.get(f, PRIORITIES[f]))
                            for k, f in tracked})
             for _ in range(STEPS_PER_FRAME if i else FIRST_FRAME_STEPS):
                 if s.step().step_norm < 1e-5:
@@ -353,6 +352,15 @@ class Retargeter:
         off_line = np.linalg.norm(np.cross(rise, _unit(across)), axis=-1)
         eps = DEGENERATE_FRACTION * height
         return (width < eps) | (off_line < eps)
+
+
+def _foot_levels(contacts: Contacts, i: int) -> dict[str, int]:
+    """Priority levels of the foot points in clip frame ``i``: 0 when planted, at least 1 for the other point of
+    a foot that has one planted (it follows, it does not drag the pin)."""
+    planted = {f for f, on in zip(contacts.names, contacts.planted[i]) if on}
+    sides = {f.split("_", 1)[0] for f in planted}
+    return {f: 0 if f in planted else max(PRIORITIES[f], 1)
+            for f in contacts.names if f in planted or f.split("_", 1)[0] in sides}
 
 
 def skeleton_height(skeleton: Skeleton) -> float:
