@@ -68,6 +68,10 @@ class ToleranceError(GsikError, ValueError):
     exit_code = 3
 
 
+class HumanoidError(GsikError, ValueError):
+    """A rig cannot be read as a humanoid: required bones not found, or a bad mapping entry."""
+
+
 class PriorError(GsikError, ValueError):
     """A pose prior file or pose-prior data is invalid, or does not fit the skeleton."""
 

@@ -41,7 +41,8 @@ def retarget_clip(args: argparse.Namespace, path: str, frames: int | None = None
     if frames:
         clip = BvhClip(clip.joints, clip.frame_time, clip.motion[:frames])
     mapping = read_mapping(args.map) if args.map else None
-    rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up)
+    rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up,
+                    name=Path(path).name)
     return rt.retarget(clip, None if progress is None else lambda i: progress(i + 1, clip.n_frames))
 
 
