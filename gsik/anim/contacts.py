@@ -127,25 +127,37 @@ def detect_contacts(points: np.ndarray, names: tuple[str, ...], fps: float, body
     return Contacts(tuple(names), planted, tuple(spans), float(fps))
 
 
+def pin_weights(contacts: Contacts, settings: ContactSettings = ContactSettings()) -> np.ndarray:
+    """(n_frames, n_points) how much each point is held by its pin: 1 inside a span, easing linearly to 0 over
+    :attr:`ContactSettings.blend_seconds` either side, 0 elsewhere."""
+    w = contacts.planted.astype(float)
+    n = len(w)
+    k = _frames(settings.blend_seconds, contacts.fps)
+    for column, start, stop in contacts.spans:
+        for i in range(max(0, start - k), start):
+            w[i, column] = max(w[i, column], 1.0 - (start - i) / (k + 1))
+        for i in range(stop, min(n, stop + k)):
+            w[i, column] = max(w[i, column], 1.0 - (i - stop + 1) / (k + 1))
+    return w
+
+
 def pin_targets(points: np.ndarray, contacts: Contacts, settings: ContactSettings = ContactSettings()) -> np.ndarray:
     """``points`` (n_frames, n_points, 3) [m] with each contact span held at one place (a new array).
 
     Inside a span the point is the mean of its positions over the span; over
     :attr:`ContactSettings.blend_seconds` before and after, it eases linearly
-    from its own path to the pin and back.
+    from its own path to the pin and back (:func:`pin_weights`).
     """
-    out = np.array(points, dtype=float)
-    n = len(out)
+    n = len(points)
     k = _frames(settings.blend_seconds, contacts.fps)
+    held = np.array(points, dtype=float)
     for column, start, stop in contacts.spans:
         pin = points[start:stop, column].mean(axis=0)
-        out[start:stop, column] = pin
-        eased = [(i, 1.0 - (start - i) / (k + 1)) for i in range(max(0, start - k), start)]  # in: 1/(k+1)..
-        eased += [(i, 1.0 - (i - stop + 1) / (k + 1)) for i in range(stop, min(n, stop + k))]  # out: ..1/(k+1)
-        for i, w in eased:
-            if not contacts.planted[i, column]:  # another span's pin stays whole
-                out[i, column] += w * (pin - points[i, column])
-    return out
+        for i in range(max(0, start - k), min(n, stop + k)):
+            if start <= i < stop or not contacts.planted[i, column]:  # another span's frames keep their pin
+                held[i, column] = pin
+    w = pin_weights(contacts, settings)[..., None]
+    return points + w * (held - points)
 
 
 def planted_speed(points: np.ndarray, planted: np.ndarray, fps: float, percentile: float = 95.0) -> float:

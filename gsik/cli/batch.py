@@ -25,7 +25,7 @@ import os
 import re
 import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import NamedTuple
@@ -130,32 +130,43 @@ def local_workers(requested: int | None, n_clips: int) -> int:
     return max(1, min(requested or cores, n_clips, cores))
 
 
-def run_batch(args: argparse.Namespace, work: Callable[[str], ClipOutcome], clips: Sequence[Path],
-              label: str) -> list[ClipOutcome]:
-    """``work`` on every clip, locally or on the Dask cluster the options name; outcomes in ``clips``' order."""
+class BatchResult(NamedTuple):
+    """A batch's outcomes, in clip order, and the number of files written into ``--out``."""
+
+    outcomes: list[ClipOutcome]
+    written: int
+
+
+def run_batch(args: argparse.Namespace, work: Callable[[str], ClipOutcome], clips: Sequence[Path], label: str,
+              folder: OutputFolder | None = None) -> BatchResult:
+    """``work`` on every clip, locally or on the Dask cluster the options name; each clip's outputs written into
+    ``folder`` as soon as it is done (a failed write fails that clip)."""
     paths = [str(p) for p in clips]
     address = scheduler_address(args)
+    done: dict[str, ClipOutcome] = {}
+    written = 0
     with progress_for(args, f"{label} {len(paths)} clips") as progress:
         if address is None:
-            done = _run_local(work, paths, local_workers(getattr(args, "workers", None), len(paths)), progress)
+            results = _run_local(work, paths, local_workers(getattr(args, "workers", None), len(paths)))
         else:
-            done = _run_dask(work, paths, address, progress)
-    return [done[p] for p in paths]
+            results = _run_dask(work, paths, address)
+        for path, outcome in results:
+            done[path], n = _write(outcome, folder)
+            written += n
+            progress(len(done), len(paths))
+    return BatchResult([done[p] for p in paths], written)
 
 
-def _run_local(work, paths: list[str], workers: int, progress) -> dict[str, ClipOutcome]:
-    """Every clip on a pool of ``workers`` processes."""
-    done: dict[str, ClipOutcome] = {}
+def _run_local(work, paths: list[str], workers: int) -> Iterator[tuple[str, ClipOutcome]]:
+    """Every clip on a pool of ``workers`` processes: ``(path, outcome)`` as they finish."""
     with ProcessPoolExecutor(max_workers=workers) as pool:
         jobs = {pool.submit(run_clip, work, p): p for p in paths}
-        for n, job in enumerate(as_completed(jobs), start=1):
-            done[jobs[job]] = _result(job, jobs[job])
-            progress(n, len(paths))
-    return done
+        for job in as_completed(jobs):
+            yield jobs[job], _result(job, jobs[job])
 
 
-def _run_dask(work, paths: list[str], address: str, progress) -> dict[str, ClipOutcome]:
-    """Every clip as one task on the Dask cluster at ``address``."""
+def _run_dask(work, paths: list[str], address: str) -> Iterator[tuple[str, ClipOutcome]]:
+    """Every clip as one task on the Dask cluster at ``address``: ``(path, outcome)`` as they finish."""
     try:
         from distributed import Client
         from distributed import as_completed as dask_completed
@@ -165,13 +176,10 @@ def _run_dask(work, paths: list[str], address: str, progress) -> dict[str, ClipO
         client = Client(address, timeout=CONNECT_TIMEOUT)
     except (OSError, TimeoutError) as exc:
         raise CommandError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
-    done: dict[str, ClipOutcome] = {}
     with client:
         jobs = {client.submit(run_clip, work, p, pure=False): p for p in paths}
-        for n, job in enumerate(dask_completed(list(jobs)), start=1):
-            done[jobs[job]] = _result(job, jobs[job])
-            progress(n, len(paths))
-    return done
+        for job in dask_completed(list(jobs)):
+            yield jobs[job], _result(job, jobs[job])
 
 
 def _result(job, path: str) -> ClipOutcome:
@@ -182,19 +190,18 @@ def _result(job, path: str) -> ClipOutcome:
         return ClipOutcome(Path(path).name, error=f"the worker failed: {type(exc).__name__}: {exc}", code=1)
 
 
-def write_outputs(outcomes: list[ClipOutcome], folder: OutputFolder | None) -> tuple[list[ClipOutcome], int]:
-    """Write every outcome's outputs into ``folder``; the outcomes (a failed write fails its clip), files written."""
-    written, out = 0, []
-    for o in outcomes:
-        if folder is not None and not o.failed:
-            try:
-                for name, data in o.outputs:
-                    folder.write_bytes(name, data)
-                    written += 1
-            except GsikError as exc:
-                o = o._replace(error=str(exc), code=exc.exit_code)
-        out.append(o)
-    return out, written
+def _write(outcome: ClipOutcome, folder: OutputFolder | None) -> tuple[ClipOutcome, int]:
+    """Write ``outcome``'s outputs into ``folder``: the outcome without them (failed if a write failed), files
+    written."""
+    written = 0
+    if folder is not None and not outcome.failed:
+        try:
+            for name, data in outcome.outputs:
+                folder.write_bytes(name, data)
+                written += 1
+        except GsikError as exc:
+            outcome = outcome._replace(error=str(exc), code=exc.exit_code)
+    return outcome._replace(outputs=()), written
 
 
 def format_table(columns: Sequence[str], outcomes: Sequence[ClipOutcome], left: Sequence[int] = ()) -> str:

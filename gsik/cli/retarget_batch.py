@@ -20,8 +20,7 @@ import gsik
 from gsik.anim.retarget import Retargeted, Retargeter
 from gsik.anim.retarget_check import RetargetCheck
 from gsik.anim.retarget_map import read_mapping
-from gsik.cli.batch import (SOME_FAILED, ClipOutcome, batch_exit, folder_clips, format_table, run_batch,
-                            summary_line, write_outputs)
+from gsik.cli.batch import SOME_FAILED, ClipOutcome, batch_exit, folder_clips, format_table, run_batch, summary_line
 from gsik.errors import ToleranceError
 from gsik.io.bvh import BvhClip, format_bvh, read_bvh
 from gsik.io.bvh_skeleton import motion_to_bvh
@@ -88,8 +87,8 @@ def retarget_folder(args: argparse.Namespace, out: TextIO) -> int:
     """``gsik retarget DIR [--out DIR]``: the table; exit 4 when some clips failed."""
     clips = folder_clips(args.clip, args.out)
     folder = OutputFolder.create(args.out) if args.out else None
-    outcomes = run_batch(args, functools.partial(retarget_one, args, folder is not None), clips, "retarget")
-    outcomes, written = write_outputs(outcomes, folder)
+    outcomes, written = run_batch(args, functools.partial(retarget_one, args, folder is not None), clips,
+                                  "retarget", folder)
     out.write(format_table(RETARGET_COLUMNS, outcomes, left=(2,)) + "\n")
     out.write("slide: p95 speed of the feet over the clip's contacts [m/s], of the targets before pinning and of "
               "the result\n")
@@ -105,7 +104,7 @@ def learn_prior_folder(args: argparse.Namespace, out: TextIO, fit_and_write) -> 
     """
     clips = folder_clips(args.clip, None)
     target = _prior_path(args.out)
-    outcomes = run_batch(args, functools.partial(learn_one, args), clips, "learn-prior")
+    outcomes = run_batch(args, functools.partial(learn_one, args), clips, "learn-prior").outcomes
     out.write(format_table(RETARGET_COLUMNS, outcomes, left=(2,)) + "\n")
     good = [o.payload for o in outcomes if not o.failed]
     out.write(summary_line(outcomes, 0, None) + "\n")

@@ -9,8 +9,7 @@ from pathlib import Path
 from typing import NamedTuple, TextIO
 
 from gsik.anim.retarget_check import Tolerances, rotation_check
-from gsik.cli.batch import (ClipOutcome, batch_exit, folder_clips, format_table, run_batch, summary_line,
-                            write_outputs)
+from gsik.cli.batch import ClipOutcome, batch_exit, folder_clips, format_table, run_batch, summary_line
 from gsik.cli.common import CommandError, check_out, deg, mm, settings_overrides, split_names
 from gsik.cli.progress import progress_for
 from gsik.errors import ToleranceError
@@ -185,8 +184,8 @@ TRACK_COLUMNS = ("frames", "joints", "up", "worst joint (p95)", "p95 %", "target
 def _track_folder(args: argparse.Namespace, out: TextIO) -> int:
     clips = folder_clips(args.clip, args.out)
     folder = OutputFolder.create(args.out) if args.out else None
-    outcomes = run_batch(args, functools.partial(track_one, args, folder is not None), clips, "track")
-    outcomes, written = write_outputs(outcomes, folder)
+    outcomes, written = run_batch(args, functools.partial(track_one, args, folder is not None), clips, "track",
+                                  folder)
     out.write(format_table(TRACK_COLUMNS, outcomes, left=(3,)) + "\n")
     out.write(summary_line(outcomes, written, args.out) + "\n")
     return batch_exit(outcomes)
