@@ -22,17 +22,24 @@ from gsik.prior_mixture import fit_mixture, write_mixture
 
 def add_commands(add, common) -> None:
     """Register both commands; ``add(name, help, description)`` makes a sub-parser, ``common`` adds --progress."""
-    p = add("retarget", "retarget a BVH clip onto the biped; report every mapped joint's error",
-            "Map the clip's joints to the biped's by name (common rigs; namespaces such as 'mixamorig:' "
-            "ignored; --map for others), scale by leg length, and solve each frame with the biped's joints "
-            "tracking the clip's by priority (ankles, wrists, head; then knees, elbows, toes, neck; then "
-            "shoulders), warm-started; the clip's planted feet are pinned. Prints each mapped joint's error, what "
+    p = add("retarget", "retarget a BVH clip onto the biped (or --onto any humanoid); report every joint's error",
+            "Recognise the clip's humanoid bones (gsik.humanoid: names of the common rig conventions, the "
+            "tree's shape where names fail; --map for the rest) and the target's, scale by leg length, and solve "
+            "each frame with the target's joints tracking the clip's bone directions at the target's own "
+            "lengths, by priority (feet, hands, head; then knees, elbows, toes, neck; then shoulders, hips, "
+            "spine), warm-started; the clip's planted feet are pinned. Prints each mapped joint's error, what "
             "could not be mapped and the foot slide, and checks the result (frames are rotations, mapped joints "
-            "p95 within 2%% of the biped's height, planted feet do not slide): a result outside is not written "
+            "p95 within 2%% of the target's height, planted feet do not slide): a result outside is not written "
             "(exit 3) unless --force. CLIP may be a folder: its clips run in parallel (locally, or on a Dask "
             "cluster with --scheduler), --out names a folder, one summary table (exit 4 if some clips failed).")
     _clip_options(p)
-    p.add_argument("--out", metavar="BIPED.bvh|DIR", help="write the biped's motion as BVH (a folder for a folder)")
+    p.add_argument("--limit-margin", type=float, default=30.0, metavar="DEG",
+                   help="let the retargeted pose exceed the target's joint limits by this much each side "
+                        "(default 30: real motion exceeds the biped's authoring ranges; 0 keeps them)")
+    p.add_argument("--onto", metavar="SKELETON", default="biped",
+                   help="the humanoid to retarget onto: a bundled skeleton, a skeleton .yaml, a .urdf or a .bvh "
+                        "clip's skeleton (default biped)")
+    p.add_argument("--out", metavar="OUT.bvh|DIR", help="write the retargeted motion as BVH (a folder for a folder)")
     p.add_argument("--units", choices=("cm", "m"), default="cm", help="BVH length unit (default cm)")
     p.add_argument("--up", choices=("z", "y"), help="BVH up axis (default: the clip's)")
     common(p, solver=False)
@@ -93,10 +100,11 @@ def _retarget(args: argparse.Namespace, out: TextIO, frames: int | None = None) 
 
 def _report(r: Retargeted, out: TextIO) -> None:
     print(f"{r.motion.n_frames} frames, up {r.up}, scale {r.scale:.5g} m per file unit (leg length)", file=out)
-    print(f"{'biped frame':16} {'clip joint':20} {'mean':>8} {'p95':>8} {'max':>8}  [mm]", file=out)
+    name = r.motion.skeleton.name
+    print(f"{name + ' frame':16} {'clip joint':20} {'mean':>8} {'p95':>8} {'max':>8}  [mm]", file=out)
     for frame, joint, mean, p95, worst in r.error_table():
         print(f"{frame:16} {joint:20} {mean:8.2f} {p95:8.2f} {worst:8.2f}", file=out)
-    print(f"biped frames not mapped: {', '.join(r.unmapped_frames) or 'none'}", file=out)
+    print(f"{name} frames not mapped: {', '.join(r.unmapped_frames) or 'none'}", file=out)
     print(f"clip joints not used: {', '.join(r.unmapped_clip) or 'none'}", file=out)
 
 

@@ -11,16 +11,17 @@ from __future__ import annotations
 
 import argparse
 import functools
+import math
 from pathlib import Path
 from typing import TextIO
 
 import numpy as np
 
-import gsik
 from gsik.anim.retarget import Retargeted, Retargeter
 from gsik.anim.retarget_check import RetargetCheck
 from gsik.anim.retarget_map import read_mapping
 from gsik.cli.batch import SOME_FAILED, ClipOutcome, batch_exit, folder_clips, format_table, run_batch, summary_line
+from gsik.cli.common import load_any_skeleton
 from gsik.errors import ToleranceError
 from gsik.io.bvh import BvhClip, format_bvh, read_bvh
 from gsik.io.bvh_skeleton import motion_to_bvh
@@ -34,14 +35,15 @@ PRIOR_NAME = "prior.npz"
 
 
 def retarget_clip(args: argparse.Namespace, path: str, frames: int | None = None, progress=None) -> Retargeted:
-    """Read ``path`` (its first ``frames`` frames), map it (``--map``, ``--file-up``) and retarget it onto the biped;
-    ``progress(done, total)`` after each frame."""
+    """Read ``path`` (its first ``frames`` frames), map it (``--map``, ``--file-up``) and retarget it ``--onto`` the
+    target (the biped by default; ``--limit-margin``); ``progress(done, total)`` after each frame."""
     clip = read_bvh(path)
     if frames:
         clip = BvhClip(clip.joints, clip.frame_time, clip.motion[:frames])
     mapping = read_mapping(args.map) if args.map else None
-    rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up,
-                    name=Path(path).name)
+    rt = Retargeter(load_any_skeleton(getattr(args, "onto", "biped")), clip, mapping,
+                    None if args.file_up == "auto" else args.file_up, name=Path(path).name,
+                    limit_margin=math.radians(getattr(args, "limit_margin", 0.0)))
     return rt.retarget(clip, None if progress is None else lambda i: progress(i + 1, clip.n_frames))
 
 

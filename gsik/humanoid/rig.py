@@ -71,6 +71,13 @@ class Rig:
             out.append(j)
         return out
 
+    def subtree(self, j: int) -> list[int]:
+        """``j`` and its descendants, in order."""
+        out = [j]
+        for c in self.children[j]:
+            out += self.subtree(c)
+        return out
+
     def is_ancestor(self, a: int, b: int) -> bool:
         """Whether ``a`` is a strict ancestor of ``b``."""
         return a in self.ancestors(b)

@@ -69,7 +69,7 @@ CONVENTIONS = [
         "Toes": "mixamorig:{s}ToeBase"}),
     _c("character_creator", [("CC_Base_BoneRoot", "at:hips"), ("CC_Base_Hip", "hips"), ("CC_Base_Waist", "spine"),
                              ("CC_Base_Spine01", "chest"), ("CC_Base_Spine02", "upperChest"),
-                             ("CC_Base_NeckTwist01", "neck"), ("CC_Base_NeckTwist02", "trunk5"),
+                             ("CC_Base_NeckTwist01", "neck"), ("CC_Base_NeckTwist02", "mid:neck"),
                              ("CC_Base_Head", "head"), ("CC_Base_FacialBone", "at:head")],
        [("CC_Base_{s}_Clavicle", "Shoulder"), ("CC_Base_{s}_Upperarm", "UpperArm"),
         ("CC_Base_{s}_UpperarmTwist01", "twist:UpperArm"), ("CC_Base_{s}_Forearm", "LowerArm"),
@@ -86,7 +86,7 @@ CONVENTIONS = [
         "Toes": "CC_Base_{s}_ToeBase"}),
     _c("unreal", [("root", "at:Floor"), ("pelvis", "hips"), ("spine_01", "trunk0"), ("spine_02", "trunk1"),
                   ("spine_03", "trunk2"), ("spine_04", "trunk3"), ("spine_05", "trunk4"), ("neck_01", "neck"),
-                  ("neck_02", "trunk6"), ("head", "head")],
+                  ("neck_02", "mid:neck"), ("head", "head")],
        [("clavicle_{s}", "Shoulder"), ("upperarm_{s}", "UpperArm"), ("upperarm_twist_01_{s}", "twist:UpperArm"),
         ("lowerarm_{s}", "LowerArm"), ("lowerarm_twist_01_{s}", "twist:LowerArm"), ("hand_{s}", "Hand"),
         ("index_01_{s}", "Finger")],
@@ -106,7 +106,7 @@ CONVENTIONS = [
         **_limbs(("{s}UpperArm", "{s}LowerArm", "{s}Hand"), ("{s}UpperLeg", "{s}LowerLeg", "{s}Foot"), "{s}Shoulder"),
         "Toes": "{s}Toes"}),
     _c("cmu_asf", [("root", "hips"), ("lowerback", "spine"), ("upperback", "chest"), ("thorax", "upperChest"),
-                   ("lowerneck", "neck"), ("upperneck", "trunk5"), ("head", "head")],
+                   ("lowerneck", "neck"), ("upperneck", "mid:neck"), ("head", "head")],
        [("{s}clavicle", "Shoulder"), ("{s}humerus", "UpperArm"), ("{s}radius", "LowerArm"), ("{s}wrist", "Hand"),
         ("{s}hand", "Finger"), ("{s}thumb", "twist:Finger")],
        [("{s}hipjoint", "at:hips"), ("{s}femur", "UpperLeg"), ("{s}tibia", "LowerLeg"), ("{s}foot", "Foot"),
@@ -158,7 +158,7 @@ CONVENTIONS = [
         **_limbs(("{s}Shldr", "{s}ForeArm", "{s}Hand"), ("{s}Thigh", "{s}Shin", "{s}Foot"), "{s}Collar"),
         "Toes": "{s}Toe"}),
     _c("makehuman", [("root", "hips"), ("spine05", "spine"), ("spine04", "trunk1"), ("spine03", "trunk2"),
-                     ("spine02", "trunk3"), ("spine01", "trunk4"), ("neck01", "neck"), ("neck02", "trunk6"),
+                     ("spine02", "trunk3"), ("spine01", "trunk4"), ("neck01", "neck"), ("neck02", "mid:neck"),
                      ("head", "head")],
        [("clavicle.{s}", "Shoulder"), ("shoulder01.{s}", "mid:Shoulder"), ("upperarm01.{s}", "UpperArm"),
         ("upperarm02.{s}", "mid:UpperArm"), ("lowerarm01.{s}", "LowerArm"), ("lowerarm02.{s}", "mid:LowerArm"),
@@ -246,7 +246,7 @@ def build(conv: Convention, a_pose: bool = False, up: str = "y", body: dict | No
             return _place(base, side, n_trunk, a_pose, body)
         if kind == "mid":
             nxt = {"UpperArm": "LowerArm", "LowerArm": "Hand", "UpperLeg": "LowerLeg", "LowerLeg": "Foot",
-                   "Shoulder": "UpperArm"}[base]
+                   "Shoulder": "UpperArm", "neck": "head"}[base]
             return 0.5 * (_place(base, side, n_trunk, a_pose, body) + _place(nxt, side, n_trunk, a_pose, body))
         return _place(part, side, n_trunk, a_pose, body)
 
