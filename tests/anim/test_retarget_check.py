@@ -77,7 +77,7 @@ def test_sliding_feet_fail_the_check():
 def test_a_walk_whose_feet_slide_when_retargeted_keeps_them_planted():
     """A long-shinned biped's walk onto the biped: bone directions at the biped's lengths slide the feet at
     0.2 m/s; pinned, they slide ten times less and the result is within its tolerance."""
-    clip = read_bvh(DATA / "long_shin_walk.bvh")
+    clip = read_bvh(DATA / "retarget" / "long_shin_walk.bvh")
     r = Retargeter(load_skeleton("biped"), clip).retarget(clip)
     assert len(r.contacts.spans) >= 8 and r.height == pytest.approx(skeleton_height(load_skeleton("biped")))
     before, after = r.slide

@@ -19,7 +19,7 @@ from gsik.io.out_folder import OutputFolder
 from gsik.prior import read_prior
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-WALK = DATA / "long_shin_walk.bvh"
+WALK = DATA / "retarget" / "long_shin_walk.bvh"
 
 
 def run(*argv: str) -> tuple[int, str]:
