@@ -113,10 +113,13 @@ def test_learn_prior_from_a_folder_writes_one_prior_inside_out(clips, tmp_path):
 
 def test_the_local_pool_and_a_dask_local_cluster_write_the_same_bytes(clips, tmp_path):
     distributed = pytest.importorskip("distributed", reason="Dask is not installed (pip install 'gsik[dask]')")
-    (clips / "b_broken.bvh").unlink()
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    (clips / "b_broken.bvh").rename(broken / "b_broken.bvh")
     local, remote = tmp_path / "local", tmp_path / "dask"
     assert run("retarget", str(clips), "--out", str(local), "--no-progress")[0] == 0
     assert run("learn-prior", str(clips), "--out", str(local), "--no-progress")[0] == 0
+    assert run("track", str(clips), "--out", str(local / "tracked"), "--no-progress")[0] == 0
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) \
             as cluster:
         code, text = run("retarget", str(clips), "--out", str(remote), "--no-progress", "--scheduler",
@@ -124,8 +127,13 @@ def test_the_local_pool_and_a_dask_local_cluster_write_the_same_bytes(clips, tmp
         assert code == 0, text
         assert run("learn-prior", str(clips), "--out", str(remote), "--no-progress", "--scheduler",
                    cluster.scheduler_address)[0] == 0
+        assert run("track", str(clips), "--out", str(remote / "tracked"), "--no-progress", "--scheduler",
+                   cluster.scheduler_address)[0] == 0
         assert "run_clip" in cluster.scheduler.task_prefixes  # the clips ran as the cluster's tasks
-    assert sorted(os.listdir(local)) == sorted(os.listdir(remote)) == ["a_walk.bvh", "c_walk.bvh", "prior.npz"]
-    for name in os.listdir(local):
+        code, text = run("retarget", str(broken), "--no-progress", "--scheduler", cluster.scheduler_address)
+        assert code == 4 and "b_broken.bvh  error:" in text  # a failure on the cluster is a row too
+    assert sorted(os.listdir(local)) == sorted(os.listdir(remote)) == ["a_walk.bvh", "c_walk.bvh", "prior.npz",
+                                                                        "tracked"]
+    for name in ("a_walk.bvh", "c_walk.bvh", "prior.npz", "tracked/a_walk.bvh", "tracked/c_walk.bvh"):
         assert (local / name).read_bytes() == (remote / name).read_bytes(), name
     assert np.isfinite(read_prior(remote / "prior.npz").mean).all()
