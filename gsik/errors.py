@@ -13,7 +13,9 @@ from collections.abc import Iterable
 
 
 class GsikError(Exception):
-    """Base class of every error raised by gsik."""
+    """Base class of every error raised by gsik; ``exit_code`` is the command line's exit code for it."""
+
+    exit_code = 2  # bad input
 
 
 class SkeletonError(GsikError, ValueError):
@@ -58,6 +60,12 @@ class ScenarioError(GsikError, ValueError):
 
 class RetargetError(GsikError, ValueError):
     """A clip cannot be retargeted: a bad mapping, or joints the retargeting needs are not mapped."""
+
+
+class ToleranceError(GsikError, ValueError):
+    """A computed result (a retargeted or tracked clip) is outside its tolerance, so it is not written; exit code 3."""
+
+    exit_code = 3
 
 
 class HumanoidError(GsikError, ValueError):

@@ -156,9 +156,10 @@ def training_poses(Q, skeleton: Skeleton, shrinkage: float | None, what: str) ->
     return Q, a
 
 
-def write_prior(prior: PosePrior, path: str | os.PathLike) -> None:
-    """Write ``prior`` as a ``.npz`` file (see the module docstring)."""
-    write_npz(path, "pose prior", format=FORMAT, skeleton=prior.skeleton, dof_names=prior.dof_names,
+def write_prior(prior: PosePrior, path: str | os.PathLike, follow_symlinks: bool = True) -> None:
+    """Write ``prior`` as a ``.npz`` file (see the module docstring), atomically
+    (:func:`gsik.io.files.atomic_write_bytes`; ``follow_symlinks=False`` refuses a link at ``path``)."""
+    write_npz(path, "pose prior", follow_symlinks, format=FORMAT, skeleton=prior.skeleton, dof_names=prior.dof_names,
               mean=prior.mean, covariance=prior.covariance, n_frames=prior.n_frames, shrinkage=prior.shrinkage,
               source=prior.source)
 
@@ -171,12 +172,12 @@ def read_prior(path: str | os.PathLike) -> PosePrior:
                      int(d["n_frames"]), float(d["shrinkage"]), str(d["source"]))
 
 
-def write_npz(path: str | os.PathLike, what: str, **arrays) -> None:
+def write_npz(path: str | os.PathLike, what: str, follow_symlinks: bool = True, **arrays) -> None:
     """Write ``arrays`` (names to arrays or scalars) as an ``.npz`` file, atomically
-    (:func:`gsik.io.files.atomic_write_bytes`: an existing file is replaced whole or left untouched); ``what``
-    names it in errors."""
+    (:func:`gsik.io.files.atomic_write_bytes`: an existing file is replaced whole or left untouched; with
+    ``follow_symlinks`` false a link at ``path`` is refused); ``what`` names it in errors."""
     del what  # the atomic writer names the path
-    atomic_write_bytes(path, npz_bytes(arrays))
+    atomic_write_bytes(path, npz_bytes(arrays), follow_symlinks)
 
 
 #: What each member of a prior file may hold: dtype kinds and number of dimensions.

@@ -213,9 +213,9 @@ def fit_mixture(Q: np.ndarray, skeleton, components: int | None = None, shrinkag
     return PoseMixture(skeleton.name, tuple(skeleton.dof_names), w, m, c, len(Q), a, source)
 
 
-def write_mixture(mixture: PoseMixture, path: str | os.PathLike) -> None:
-    """Write ``mixture`` as a ``.npz`` file (see the module docstring)."""
-    write_npz(path, "pose mixture", format=FORMAT, skeleton=mixture.skeleton, dof_names=mixture.dof_names,
+def write_mixture(mixture: PoseMixture, path: str | os.PathLike, follow_symlinks: bool = True) -> None:
+    """Write ``mixture`` as a ``.npz`` file (see the module docstring), atomically, as :func:`gsik.prior.write_prior`."""
+    write_npz(path, "pose mixture", follow_symlinks, format=FORMAT, skeleton=mixture.skeleton, dof_names=mixture.dof_names,
               weights=mixture.weights, means=mixture.means, covariances=mixture.covariances,
               n_frames=mixture.n_frames, shrinkage=mixture.shrinkage, source=mixture.source)
 

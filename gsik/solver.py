@@ -19,7 +19,7 @@ from gsik import control, kernels
 from gsik.attempts import SETTLED_AGREEMENT, SETTLED_REPEATS, AttemptPolicy  # noqa: F401  (re-exported)
 from gsik.balance import center_of_mass
 from gsik.errors import SolverError, TargetError, choices, show_value
-from gsik.kernels import O_COST, O_FINITE, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
+from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
 from gsik.kernels import solve as solve_kernels  # noqa: F401  (gsik.solver.solve_kernels, as before)
 from gsik.kernels import step as step_kernels
 from gsik.kernels.kinematics import forward_kinematics

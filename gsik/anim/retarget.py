@@ -25,8 +25,14 @@ Per frame:
    light posture below everything, so directions no target fixes (a straight
    arm's twist) stay natural.
 
+5. Planted feet stay planted (:mod:`gsik.anim.contacts`): the clip's foot
+   and toe contacts (low and slow) pin those targets to one world position
+   for the whole contact, tracked at the top priority.
+
 Biped frames nothing maps to and clip joints that drive nothing are
-reported; so is every mapped frame's error per clip frame.
+reported; so is every mapped frame's error per clip frame (against the
+clip's targets, before pinning), and the foot slide before and after.
+:meth:`Retargeted.check` checks the result (:mod:`gsik.anim.retarget_check`).
 """
 
 from __future__ import annotations
@@ -37,8 +43,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from gsik.anim.contacts import Contacts, detect_contacts, pin_targets, planted_speed
 from gsik.anim.motion import Motion
 from gsik.anim.pelvis_frame import check_rotations, pelvis_frames, rig_lean, up_reference
+from gsik.anim.retarget_check import RetargetCheck, Tolerances, check_retarget
 from gsik.anim.retarget_map import HEAD_TOP, resolve_mapping, skeleton_bones
 from gsik.errors import RetargetError
 from gsik.humanoid import rig_from_clip
@@ -72,6 +80,11 @@ STEPS_PER_FRAME = 6
 FIRST_FRAME_STEPS = 60
 #: Weight of the rest posture below every target [1/rad^2]: a tie-breaker only.
 REST_POSTURE_WEIGHT = 0.01
+#: The canonical bones whose contacts are detected and pinned (a foot's heel point and its toe).
+FOOT_BONES = ("leftFoot", "leftToes", "rightFoot", "rightToes")
+#: A pelvis frame is degenerate where the hips are closer than this, or the spine this close to their line,
+#: in body heights.
+DEGENERATE_FRACTION = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,6 +100,10 @@ class Retargeted:
             target after the solve, columns in ``mapping``'s order.
         scale: Metres of the skeleton per unit of the clip file.
         up: The clip's up axis (``"y"`` or ``"z"``).
+        height: The skeleton's rest height [m].
+        contacts: The clip's foot contacts (columns: the mapped frames of :data:`FOOT_BONES`).
+        slide: p95 planted-foot speed [m/s] of the targets before pinning and of the result.
+        degenerate: (n_frames,) bool, frames whose pelvis the clip's hips and spine cannot define.
     """
 
     motion: Motion
@@ -96,6 +113,15 @@ class Retargeted:
     errors: np.ndarray
     scale: float
     up: str
+    height: float
+    contacts: Contacts
+    slide: tuple[float, float]
+    degenerate: np.ndarray
+
+    def check(self, tolerances: Tolerances = Tolerances()) -> RetargetCheck:
+        """The result against its tolerances (:mod:`gsik.anim.retarget_check`)."""
+        return check_retarget(self.motion, self.errors, self.mapping, self.height, self.slide, self.degenerate,
+                              tolerances)
 
     def error_table(self) -> list[tuple[str, str, float, float, float]]:
         """Per mapped frame: ``(frame, clip joint, mean, p95, max)`` errors [mm]."""
@@ -335,28 +361,73 @@ class Retargeter:
         return s
 
     def retarget(self, clip: BvhClip, progress: Callable[[int], None] | None = None) -> Retargeted:
-        """Solve every frame of ``clip``, each warm-started from the previous one's pose."""
-        W, points = self.world_targets(clip)
-        tracked = [(k, f, BONE_PRIORITIES.get(self._bone[f], 2)) for k, f in enumerate(self.mapping)
-                   if f != self._root]
+        """Solve every frame of ``clip``, each warm-started from the previous one's pose, planted feet pinned."""
+        W, asked = self.world_targets(clip)
+        clip_points = clip_world_positions(clip, self.up)[:, self._columns] * self.scale
+        feet = [k for k, f in enumerate(self.mapping) if self._bone[f] in FOOT_BONES]
+        height = skeleton_height(self.skeleton)
+        contacts = detect_contacts(clip_points[:, feet], tuple(list(self.mapping)[k] for k in feet),
+                                   1.0 / clip.frame_time, height)
+        points = asked.copy()
+        points[:, feet] = pin_targets(asked[:, feet], contacts)
+        Q, got = self._solve(W, points, contacts, progress)
         frames = [self.skeleton.frame_of(f) for f in self.mapping]
+        err = np.linalg.norm(got[:, frames] - asked, axis=-1)
+        slide = (planted_speed(asked[:, feet], contacts.planted, contacts.fps),
+                 planted_speed(got[:, [frames[k] for k in feet]], contacts.planted, contacts.fps))
+        motion = Motion(self.skeleton, Q, (self._root,) * clip.n_frames, W, clip.frame_time)
+        return Retargeted(motion, dict(self.mapping), self.unmapped_frames, self.unmapped_clip, err,
+                          self.scale, self.up, height, contacts, slide, self._degenerate(clip_points, height))
+
+    def _solve(self, W: np.ndarray, points: np.ndarray, contacts: Contacts,
+               progress: Callable[[int], None] | None) -> tuple[np.ndarray, np.ndarray]:
+        """Angles (n, n_dofs) and world positions (n, n_skeleton_frames, 3) [m] tracking ``points``; a foot point
+        in contact is at priority 0, the other point of that foot (the heel lifting off a planted toe) at 1."""
+        levels = {f: BONE_PRIORITIES.get(self._bone[f], 2) for f in self.mapping if f != self._root}
+        side = {f: "left" if self._bone[f].startswith("left") else "right" for f in contacts.names}
         s = self.solver()
-        n = clip.n_frames
+        n = len(points)
         Q = np.empty((n, self.skeleton.n_dofs))
-        err = np.zeros((n, len(frames)))
+        got = np.empty((n, self.skeleton.n_frames, 3))
         for i in range(n):
             s.set_world_from_root(W[i])
-            s.set_targets({f: Target(points[i, k], position_only=True, priority=level) for k, f, level in tracked})
+            level = {**levels, **_foot_levels(contacts, i, side, levels)}
+            s.set_targets({f: Target(points[i, k], position_only=True, priority=level[f])
+                           for k, f in enumerate(self.mapping) if f in level})
             for _ in range(STEPS_PER_FRAME if i else FIRST_FRAME_STEPS):
                 if s.step().step_norm < 1e-5:
                     break
             Q[i] = s.q
-            err[i] = np.linalg.norm(s.world_positions()[frames] - points[i], axis=1)
+            got[i] = s.world_positions()
             if progress is not None:
                 progress(i)
-        motion = Motion(self.skeleton, Q, (self._root,) * n, W, clip.frame_time)
-        return Retargeted(motion, dict(self.mapping), self.unmapped_frames, self.unmapped_clip, err,
-                          self.scale, self.up)
+        return Q, got
+
+    def _degenerate(self, clip_points: np.ndarray, height: float) -> np.ndarray:
+        """(n,) bool: frames where the clip's hips coincide or its spine joint lies on their line."""
+        col = {f: k for k, f in enumerate(self.mapping)}
+        left, right = (clip_points[:, col[self._frames[b]]] for b in ("leftUpperLeg", "rightUpperLeg"))
+        across = right - left
+        width = np.linalg.norm(across, axis=-1)
+        rise = clip_points[:, col[self._spine]] - 0.5 * (left + right)
+        off_line = np.linalg.norm(np.cross(rise, _unit(across)), axis=-1)
+        eps = DEGENERATE_FRACTION * height
+        return (width < eps) | (off_line < eps)
+
+
+def _foot_levels(contacts: Contacts, i: int, side: Mapping[str, str], levels: Mapping[str, int]) -> dict[str, int]:
+    """Priority levels of the foot points in clip frame ``i``: 0 when planted, at least 1 for the other point of
+    a foot that has one planted (it follows, it does not drag the pin); ``side``: each point's side."""
+    planted = {f for f, on in zip(contacts.names, contacts.planted[i]) if on}
+    sides = {side[f] for f in planted}
+    return {f: 0 if f in planted else max(levels[f], 1)
+            for f in contacts.names if f in planted or side[f] in sides}
+
+
+def skeleton_height(skeleton: Skeleton) -> float:
+    """The skeleton's rest height [m]: the vertical (z) extent of its frames in the rest pose."""
+    z = world_frames(skeleton, skeleton.rest, np.eye(4), skeleton.root)[1][:, 2]
+    return float(z.max() - z.min())
 
 
 def _anchors(skeleton: Skeleton, frames: list[str], root: str) -> dict[str, str | None]:

@@ -19,7 +19,7 @@ as in files written for the biped before, the skeleton's frame names::
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 
 from gsik.errors import HumanoidError, RetargetError, choices, show_value

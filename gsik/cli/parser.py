@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from typing import TextIO
 
 import gsik
+from gsik.cli.batch import add_batch_options
 from gsik.cli.commands import cmd_bench, cmd_scenarios, cmd_solve, cmd_walk
 from gsik.cli.track import cmd_track
 from gsik.cli.common import PROG
@@ -63,12 +64,12 @@ def build_parser() -> argparse.ArgumentParser:
         prog=PROG, allow_abbrev=False,
         description="Real-time character inverse kinematics by Projected Gauss-Seidel (Kenwright 2012).",
         epilog="Run 'gsik COMMAND --help' for a command's options. Lengths are metres, angles radians, "
-               "unless an option says otherwise.")
+               "unless an option says otherwise. " + EXIT_CODES)
     parser.add_argument("--version", action="version", version=f"%(prog)s {gsik.__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     def add(name: str, help: str, description: str) -> argparse.ArgumentParser:
-        return sub.add_parser(name, help=help, description=description, allow_abbrev=False)
+        return sub.add_parser(name, help=help, description=description, allow_abbrev=False, epilog=EXIT_CODES)
 
     p = add("info", "joints, degrees of freedom with limits, effectors, sites and segments of a skeleton",
             "Describe a skeleton: joints, degrees of freedom with limits (degrees and radians), effectors, "
@@ -163,7 +164,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--file-up", choices=("auto", "y", "z"), default="auto",
                    help="the clip's up axis (default: detected over the whole clip, with a note why)")
     p.add_argument("--steps-per-frame", type=_positive_int, help="most solver steps per frame (default 5)")
-    p.add_argument("--workers", type=_positive_int, help="worker processes for a folder (default: one per core)")
+    add_batch_options(p)
+    p.add_argument("--force", action="store_true", help="write a result even when a frame is not a rotation")
     p.add_argument("--out", metavar="SOLVED.bvh|DIR", help="write the solved motion as BVH (a folder for a folder)")
     g = p.add_argument_group("BVH output (default: the input's conventions)")
     g.add_argument("--units", choices=("cm", "m"), help="change the length unit (writes gsik's layout)")
@@ -184,10 +186,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _fail(message: str) -> int:
-    """Report an input problem as one line on stderr; exit code 2."""
+#: The exit codes, for ``gsik --help`` and every command's.
+EXIT_CODES = ("exit codes: 0 done; 2 bad input (a file, a field, an option); 3 a result outside its tolerance, not "
+              "written (--force writes it); 4 some clips of a folder failed (the others were written); 1 an "
+              "unexpected failure; 130 interrupted.")
+
+
+def _fail(message: str, code: int = 2) -> int:
+    """Report an input problem (or a result outside its tolerance) as one line on stderr; exit code ``code``."""
     print(f"{PROG}: error: {' '.join(message.split(chr(10)))}", file=sys.stderr)
-    return 2
+    return code
 
 
 def _inputs(args: argparse.Namespace) -> str:
@@ -207,8 +215,8 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
         return int(exc.code or 0)
     try:
         return args.run(args, out)
-    except GsikError as exc:  # CommandError included
-        return _fail(str(exc))
+    except GsikError as exc:  # CommandError included; a ToleranceError exits 3
+        return _fail(str(exc), exc.exit_code)
     except OSError as exc:
         where = f" {show_value(exc.filename)}" if exc.filename else ""
         return _fail(f"cannot access{where}: {exc.strerror or exc}")

@@ -3,17 +3,20 @@
 from __future__ import annotations
 
 import argparse
-import math
+import functools
+from pathlib import Path
 from typing import TextIO
 
-from gsik.anim.retarget import Retargeted, Retargeter
-from gsik.anim.retarget_map import read_mapping
-from gsik.errors import RetargetError
-from gsik.cli.common import CommandError, check_out, load_any_skeleton
+import numpy as np
+
+import gsik
+from gsik.anim.retarget import Retargeted
+from gsik.cli.batch import add_batch_options
+from gsik.cli.common import check_out
 from gsik.cli.progress import progress_for
-from gsik.io.bvh import read_bvh
+from gsik.cli.retarget_batch import learn_prior_folder, retarget_clip, retarget_folder, verdict
 from gsik.io.bvh_skeleton import write_motion_bvh
-from gsik.prior import CV_SEGMENTS, fit_prior, write_prior
+from gsik.prior import fit_prior, write_prior
 from gsik.prior_mixture import MAX_COMPONENTS, fit_mixture, write_mixture
 
 
@@ -24,7 +27,11 @@ def add_commands(add, common) -> None:
             "tree's shape where names fail; --map for the rest) and the target's, scale by leg length, and solve "
             "each frame with the target's joints tracking the clip's bone directions at the target's own "
             "lengths, by priority (feet, hands, head; then knees, elbows, toes, neck; then shoulders, hips, "
-            "spine), warm-started. Prints each mapped joint's error and what could not be mapped.")
+            "spine), warm-started; the clip's planted feet are pinned. Prints each mapped joint's error, what "
+            "could not be mapped and the foot slide, and checks the result (frames are rotations, mapped joints "
+            "p95 within 2%% of the target's height, planted feet do not slide): a result outside is not written "
+            "(exit 3) unless --force. CLIP may be a folder: its clips run in parallel (locally, or on a Dask "
+            "cluster with --scheduler), --out names a folder, one summary table (exit 4 if some clips failed).")
     _clip_options(p)
     p.add_argument("--limit-margin", type=float, default=30.0, metavar="DEG",
                    help="let the retargeted pose exceed the target's joint limits by this much each side "
@@ -32,7 +39,7 @@ def add_commands(add, common) -> None:
     p.add_argument("--onto", metavar="SKELETON", default="biped",
                    help="the humanoid to retarget onto: a bundled skeleton, a skeleton .yaml, a .urdf or a .bvh "
                         "clip's skeleton (default biped)")
-    p.add_argument("--out", metavar="BIPED.bvh", help="write the biped's motion as BVH")
+    p.add_argument("--out", metavar="OUT.bvh|DIR", help="write the retargeted motion as BVH (a folder for a folder)")
     p.add_argument("--units", choices=("cm", "m"), default="cm", help="BVH length unit (default cm)")
     p.add_argument("--up", choices=("z", "y"), help="BVH up axis (default: the clip's)")
     common(p, solver=False)
@@ -41,9 +48,11 @@ def add_commands(add, common) -> None:
     p = add("learn-prior", "learn the biped's pose prior (a Gaussian over its angles) from a BVH clip",
             "Retarget the clip onto the biped (as 'gsik retarget') and write the mean and regularised "
             "covariance of its poses as a .npz pose prior (gsik.prior); the shrinkage is chosen by "
-            "cross-validation over time segments of the clip.")
+            "cross-validation over time segments of the clip. CLIP may be a folder: every clip is retargeted "
+            "in the batch (as 'gsik retarget DIR') and the prior learned from all their frames; --out DIR "
+            "writes DIR/prior.npz.")
     _clip_options(p)
-    p.add_argument("--out", metavar="PRIOR.npz", required=True, help="the pose prior file to write")
+    p.add_argument("--out", metavar="PRIOR.npz|DIR", required=True, help="the pose prior file to write")
     p.add_argument("--frames", type=_frame_count, help="use only the clip's first N frames (N >= 1)")
     p.add_argument("--source", default="", help="what the clip is and its licence, kept in the file")
     p.add_argument("--components", type=_components, metavar="K|auto",
@@ -78,37 +87,26 @@ def _frame_count(text: str) -> int:
 
 
 def _clip_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("clip", metavar="CLIP.bvh", help="a BVH clip of a human rig")
+    p.add_argument("clip", metavar="CLIP.bvh|DIR", help="a BVH clip of a human rig, or a folder of them")
+    p.add_argument("--force", action="store_true", help="use a result even when it is outside its tolerance")
+    add_batch_options(p)
     p.add_argument("--map", metavar="MAP.yaml", help="biped frame -> clip joint entries the heuristics miss")
     p.add_argument("--file-up", choices=("auto", "y", "z"), default="auto",
                    help="the clip's up axis (default: detected over the whole clip)")
 
 
-def _retarget(args: argparse.Namespace, frames: int | None = None) -> Retargeted:
-    clip = read_bvh(args.clip)
-    if frames:
-        clip = type(clip)(clip.joints, clip.frame_time, clip.motion[:frames])
-    if hasattr(args, "components"):
-        _check_learnable(args, clip.n_frames)
-    mapping = read_mapping(args.map) if args.map else None
-    try:
-        rt = Retargeter(load_any_skeleton(getattr(args, "onto", "biped")), clip, mapping,
-                        None if args.file_up == "auto" else args.file_up,
-                        name=args.clip, limit_margin=math.radians(getattr(args, "limit_margin", 0.0)))
-        with progress_for(args, "retarget") as bar:
-            return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
-    except RetargetError as exc:  # name the clip where the retargeter did not
-        message = str(exc)
-        raise RetargetError(message if message.startswith(str(args.clip)) else f"{args.clip}: {message}") from None
-
-
-def _check_learnable(args: argparse.Namespace, n_frames: int) -> None:
-    """Before the retarget: enough frames to learn from, and to fit ``--components``."""
-    if n_frames < 2 * CV_SEGMENTS:
-        raise CommandError(f"{args.clip}: {n_frames} frames; learning a prior needs at least {2 * CV_SEGMENTS}")
-    if isinstance(args.components, int) and args.components > n_frames // 2:
-        raise CommandError(f"--components {args.components}: {n_frames} frames fit at most {n_frames // 2} "
-                           "components")
+def _retarget(args: argparse.Namespace, out: TextIO, frames: int | None = None) -> Retargeted:
+    """One clip retargeted and reported; :class:`~gsik.errors.ToleranceError` (after the report) when the result is
+    outside its tolerance and ``--force`` is not given."""
+    with progress_for(args, "retarget") as bar:
+        r = retarget_clip(args, args.clip, frames, bar)
+    _report(r, out)
+    check = r.check()
+    print(f"feet: {len(r.contacts.spans)} contacts pinned; slide (p95 planted speed) {r.slide[0]:.3f} m/s before, "
+          f"{r.slide[1]:.3f} m/s after", file=out)
+    print(f"check: {verdict(args, args.clip, check)} (worst joint p95 {check.worst_p95 * 1e3:.1f} mm, "
+          f"{100 * check.worst_p95 / r.height:.2f}% of the height {r.height:.3f} m)", file=out)
+    return r
 
 
 def _report(r: Retargeted, out: TextIO) -> None:
@@ -122,10 +120,11 @@ def _report(r: Retargeted, out: TextIO) -> None:
 
 
 def cmd_retarget(args: argparse.Namespace, out: TextIO) -> int:
+    if Path(args.clip).is_dir():
+        return retarget_folder(args, out)
     if args.out:
         check_out(args.out, (".bvh",), "BVH")
-    r = _retarget(args)
-    _report(r, out)
+    r = _retarget(args, out)
     if args.out:
         write_motion_bvh(args.out, r.motion, units=args.units, up=args.up or r.up)
         print(f"wrote {args.out}", file=out)
@@ -133,17 +132,24 @@ def cmd_retarget(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def cmd_learn_prior(args: argparse.Namespace, out: TextIO) -> int:
+    fit = functools.partial(_fit_and_write, args)
+    if Path(args.clip).is_dir():
+        return learn_prior_folder(args, out, fit)
     check_out(args.out, (".npz",), "pose prior")
-    r = _retarget(args, args.frames)
-    _report(r, out)
-    if args.components is None:
-        prior = fit_prior(r.motion.q, r.motion.skeleton, source=args.source)
-        write_prior(prior, args.out)
-        print(f"wrote {args.out}: {prior.n_frames} poses, shrinkage {prior.shrinkage:g}", file=out)
-        return 0
-    mixture = fit_mixture(r.motion.q, r.motion.skeleton, None if args.components == "auto" else args.components,
-                          source=args.source)
-    write_mixture(mixture, args.out)
-    print(f"wrote {args.out}: {mixture.n_frames} poses, {mixture.n_components} components, "
-          f"shrinkage {mixture.shrinkage:g}", file=out)
+    r = _retarget(args, out, args.frames)
+    print(fit(r.motion.q, args.out, True), file=out)
     return 0
+
+
+def _fit_and_write(args: argparse.Namespace, q: np.ndarray, path, follow_symlinks: bool) -> str:
+    """Fit the prior (a Gaussian, or ``--components`` of them) to ``q`` (n, n_dofs) [rad] and write it to ``path``;
+    the report line."""
+    biped = gsik.load_skeleton("biped")
+    if args.components is None:
+        prior = fit_prior(q, biped, source=args.source)
+        write_prior(prior, path, follow_symlinks)
+        return f"wrote {path}: {prior.n_frames} poses, shrinkage {prior.shrinkage:g}"
+    mixture = fit_mixture(q, biped, None if args.components == "auto" else args.components, source=args.source)
+    write_mixture(mixture, path, follow_symlinks)
+    return (f"wrote {path}: {mixture.n_frames} poses, {mixture.n_components} components, "
+            f"shrinkage {mixture.shrinkage:g}")

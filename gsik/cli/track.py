@@ -3,33 +3,20 @@
 from __future__ import annotations
 
 import argparse
-import os
+import functools
 import sys
-import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import NamedTuple, TextIO
 
-from gsik.cli.common import CommandError, check_out, deg, make_dir, mm, settings_overrides, split_names
+from gsik.anim.retarget_check import Tolerances, rotation_check
+from gsik.cli.batch import ClipOutcome, batch_exit, folder_clips, format_table, run_batch, summary_line
+from gsik.cli.common import CommandError, check_out, deg, mm, settings_overrides, split_names
 from gsik.cli.progress import progress_for
-from gsik.errors import GsikError
-from gsik.io.bvh import read_bvh, write_bvh
-from gsik.io.bvh_skeleton import clip_with_motion, import_bvh, write_motion_bvh
-
-
-class TrackRow(NamedTuple):
-    """One clip's line of the folder summary (lengths [m])."""
-
-    clip: str
-    frames: int
-    joints: int
-    up: str
-    worst_joint: str
-    worst_p95: float
-    height: float
-    target_max: float
-    seconds: float
-    error: str = ""
+from gsik.errors import ToleranceError
+from gsik.io.bvh import format_bvh, read_bvh
+from gsik.io.bvh_skeleton import clip_with_motion, import_bvh, motion_to_bvh
+from gsik.io.files import atomic_write_text
+from gsik.io.out_folder import OutputFolder
 
 
 def cmd_track(args: argparse.Namespace, out: TextIO) -> int:
@@ -38,8 +25,11 @@ def cmd_track(args: argparse.Namespace, out: TextIO) -> int:
     if args.out:
         check_out(args.out, (".bvh",), "BVH")
     with progress_for(args, "track") as progress:
-        run = _track(args, args.clip, args.out, progress)
+        run = _track(args, args.clip, progress)
     _write_report(out, args, run)
+    if args.out:
+        atomic_write_text(args.out, _output_text(args, run.imported, run.result.motion))
+        out.write(f"wrote {args.out}\n")
     return 0
 
 
@@ -51,8 +41,9 @@ class _Run(NamedTuple):
     result: object
 
 
-def _track(args: argparse.Namespace, path: str, out_path: str | None, progress=None) -> _Run:
-    """Import ``path``, track it as the options say, write ``out_path`` (when given)."""
+def _track(args: argparse.Namespace, path: str, progress=None) -> _Run:
+    """Import ``path`` and track it as the options say; :class:`ToleranceError` (unless ``--force``) when a frame
+    of the result is not a rotation."""
     from gsik.anim.tracking import track_clip
 
     clip = read_bvh(path)
@@ -65,8 +56,11 @@ def _track(args: argparse.Namespace, path: str, out_path: str | None, progress=N
     result = track_clip(imported.skeleton, imported.motion, targets, root=args.root, position_only=position_only,
                         priorities=priorities, follow_clip=args.follow_clip, posture_weight=args.posture_weight,
                         progress=progress, **options)
-    if out_path:
-        _write_output(args, out_path, imported, result.motion)
+    rotations = rotation_check(result.motion)
+    if not rotations.error <= Tolerances().rotation and not args.force:
+        raise ToleranceError(f"{path}: the result is outside its tolerance: frame {rotations.frame} is not a "
+                             f"rotation at clip frame {rotations.clip_frame} (deviation {rotations.error:.3g}); "
+                             "reason: a degenerate frame (use --force to write it anyway)")
     return _Run(clip, imported, result)
 
 
@@ -118,15 +112,16 @@ def _priority_map(values) -> dict[str, int]:
     return out
 
 
-def _write_output(args: argparse.Namespace, path: str, imported, motion) -> None:
-    """The solved motion in the input's conventions, or gsik's export when ``--units`` or ``--up`` change them."""
+def _output_text(args: argparse.Namespace, imported, motion) -> str:
+    """The solved motion as BVH text in the input's conventions, or gsik's export when ``--units`` or ``--up``
+    change them."""
     file_units = {1.0: "m", 0.01: "cm"}.get(imported.scale)
     keep = (args.units in (None, file_units)) and (args.up in (None, imported.up))
     if keep:
-        write_bvh(path, clip_with_motion(imported, motion, wrap_angles=args.wrap_angles),
-                  precision=8 if file_units == "m" else 6)
-    else:
-        write_motion_bvh(path, motion, units=args.units or file_units or "cm", up=args.up or imported.up)
+        return format_bvh(clip_with_motion(imported, motion, wrap_angles=args.wrap_angles),
+                          8 if file_units == "m" else 6)
+    units = args.units or file_units or "cm"
+    return format_bvh(motion_to_bvh(motion, units=units, up=args.up or imported.up), 8 if units == "m" else 6)
 
 
 def _write_report(out: TextIO, args: argparse.Namespace, run: _Run) -> None:
@@ -142,8 +137,6 @@ def _write_report(out: TextIO, args: argparse.Namespace, run: _Run) -> None:
               f"{'; the clip pose preferred' if args.follow_clip else ''}\n")
     _write_target_summary(out, result, clip.n_frames)
     _write_body_table(out, result)
-    if args.out:
-        out.write(f"wrote {args.out}\n")
 
 
 def _write_target_summary(out: TextIO, result, n_frames: int) -> None:
@@ -189,70 +182,29 @@ def _write_body_table(out: TextIO, result) -> None:
 # -- a folder of clips ---------------------------------------------------------------------------------
 
 
+#: The folder summary's columns (the worst untracked joint's p95 against the clip, % of the body height).
+TRACK_COLUMNS = ("frames", "joints", "up", "worst joint (p95)", "p95 %", "targets max")
+
+
 def _track_folder(args: argparse.Namespace, out: TextIO) -> int:
-    clips = _folder_clips(args)
-    folder = make_dir(args.out) if args.out else None
-    rows = _track_clips(args, clips, folder)
-    out.write(format_track_table([rows[p] for p in clips]) + "\n")
-    failed = any(r.error for r in rows.values())
-    if folder is not None:
-        out.write(f"wrote {sum(not r.error for r in rows.values())} files to {args.out}\n")
-    return 2 if failed else 0
+    clips = folder_clips(args.clip, args.out)
+    folder = OutputFolder.create(args.out) if args.out else None
+    outcomes, written = run_batch(args, functools.partial(track_one, args, folder is not None), clips, "track",
+                                  folder)
+    out.write(format_table(TRACK_COLUMNS, outcomes, left=(3,)) + "\n")
+    out.write(summary_line(outcomes, written, args.out) + "\n")
+    return batch_exit(outcomes)
 
 
-def _folder_clips(args: argparse.Namespace) -> list[Path]:
-    """The folder's ``.bvh`` files in name order; refuses an empty folder and an ``--out`` that names a file."""
-    clips = sorted(p for p in Path(args.clip).iterdir() if p.suffix.lower() == ".bvh" and p.is_file())
-    if not clips:
-        raise CommandError(f"folder {args.clip!r} holds no .bvh files")
-    if args.out and Path(args.out).suffix.lower() == ".bvh":
-        raise CommandError(f"--out {args.out!r}: with a folder of clips, --out names a folder")
-    return clips
-
-
-def _track_clips(args: argparse.Namespace, clips: list[Path], folder: Path | None) -> dict[Path, TrackRow]:
-    """Track every clip in a pool of worker processes; each clip's summary row."""
-    workers = args.workers or min(len(clips), os.cpu_count() or 1)
-    rows: dict[Path, TrackRow] = {}
-    with progress_for(args, f"track {len(clips)} clips") as progress, \
-            ProcessPoolExecutor(max_workers=workers) as pool:
-        jobs = {pool.submit(track_one, args, str(p), _out_path(folder, p)): p for p in clips}
-        for n, job in enumerate(as_completed(jobs), start=1):
-            rows[jobs[job]] = job.result()
-            progress(n, len(clips))
-    return rows
-
-
-def _out_path(folder: Path | None, clip: Path) -> str | None:
-    return str(folder / clip.name) if folder else None
-
-
-def track_one(args: argparse.Namespace, path: str, out_path: str | None) -> TrackRow:
-    """Track one clip of a folder (in a worker process); its summary row, or the error that stopped it."""
-    start = time.perf_counter()
-    try:
-        clip, imported, result = _track(args, path, out_path)
-    except GsikError as exc:
-        return TrackRow(Path(path).name, 0, 0, "-", "-", 0.0, 0.0, 0.0, 0.0, str(exc))
+def track_one(args: argparse.Namespace, write: bool, path: str) -> ClipOutcome:
+    """Track one clip of a folder (in a worker): its table cells and, with ``write``, its BVH text."""
+    clip, imported, result = _track(args, path)
     joints = set(imported.skeleton.joint_names)
     rows = [r for r in result.body_table(95.0) if r.name in joints]
     worst = rows[0] if rows else None
-    return TrackRow(Path(path).name, clip.n_frames, imported.skeleton.n_joints, imported.up,
-                    worst.name if worst else "-", worst.percentile_error if worst else 0.0, result.body_height,
-                    result.summary(0).max_position_error, time.perf_counter() - start)
-
-
-def format_track_table(rows: list[TrackRow]) -> str:
-    """The folder summary: one line per clip."""
-    w = max(len(r.clip) for r in rows)
-    head = (f"{'clip':<{w}}  {'frames':>6} {'joints':>6} {'up':>2}  {'worst joint (p95)':<22} {'p95 %':>6}  "
-            f"{'targets max':>12}  {'seconds':>7}")
-    lines = [head, "-" * len(head)]
-    for r in rows:
-        if r.error:
-            lines.append(f"{r.clip:<{w}}  error: {r.error}")
-            continue
-        pct = 100 * r.worst_p95 / r.height if r.height else 0.0
-        lines.append(f"{r.clip:<{w}}  {r.frames:>6} {r.joints:>6} {r.up:>2}  {r.worst_joint:<22} {pct:5.2f}%  "
-                     f"{mm(r.target_max):>12}  {r.seconds:7.2f}")
-    return "\n".join(lines)
+    pct = 100 * worst.percentile_error / result.body_height if worst and result.body_height else 0.0
+    cells = (str(clip.n_frames), str(imported.skeleton.n_joints), imported.up, worst.name if worst else "-",
+             f"{pct:.2f}%", mm(result.summary(0).max_position_error))
+    name = Path(path).name
+    outputs = ((name, _output_text(args, imported, result.motion).encode("utf-8")),) if write else ()
+    return ClipOutcome(name, cells, outputs=outputs)

@@ -165,12 +165,12 @@ def _fsync_directory(directory: str) -> None:
 STALE_TEMPORARY_AGE = 600.0
 
 
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
+def atomic_write_text(path: str | os.PathLike, text: str, follow_symlinks: bool = True) -> None:
     """Replace ``path`` with ``text`` (UTF-8) atomically: :func:`atomic_write_bytes`."""
-    atomic_write_bytes(path, text.encode("utf-8"))
+    atomic_write_bytes(path, text.encode("utf-8"), follow_symlinks)
 
 
-def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+def atomic_write_bytes(path: str | os.PathLike, data: bytes, follow_symlinks: bool = True) -> None:
     """Replace ``path`` with ``data`` atomically; every file gsik writes goes through here.
 
     Writes a temporary file in the same directory, fsyncs it and renames it
@@ -178,7 +178,9 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
     existing ``path`` is left untouched. What a save promises besides:
 
     - an existing file keeps its permissions;
-    - a symbolic link is written through: its target gets the new text, the link stays a link;
+    - a symbolic link is written through: its target gets the new data, the link stays a link; with
+      ``follow_symlinks=False`` a symbolic link at ``path`` is refused instead (nothing outside a folder of
+      outputs is written through one planted in it; the rename never follows one made meanwhile);
     - a read-only file is refused (:class:`GsikFileError`), never silently replaced;
     - temporary files that earlier saves of ``path`` left behind (a process killed mid-save) are removed.
 
@@ -186,7 +188,11 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
         GsikFileError: the file cannot be written.
     """
     _check_path(path, "cannot write")
-    target = os.path.realpath(os.fspath(path))  # through symbolic links: replace the file, not the link
+    if follow_symlinks:
+        target = os.path.realpath(os.fspath(path))  # through symbolic links: replace the file, not the link
+    else:
+        target = os.path.abspath(os.fspath(path))
+        _refuse_symlink(path, target)
     directory, base = os.path.split(target)
     mode = _writable_mode(path, target)
     _remove_stale_temporaries(directory, base)
@@ -208,6 +214,21 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
     _fsync_directory(directory)
 
 
+def _refuse_symlink(path: str | os.PathLike, target: str) -> None:
+    """:class:`GsikFileError` when ``target`` is a symbolic link (it is not followed)."""
+    try:
+        is_link = stat.S_ISLNK(os.lstat(target).st_mode)
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise file_error("cannot write", path, exc) from exc
+    if is_link:
+        err = GsikFileError(f"cannot write {show_value(os.fspath(path), MAX_PATH_CHARS)}: it is a symbolic link; "
+                            "outputs are not written through links (remove it, or choose another --out)")
+        err.errno, err.filename = errno.ELOOP, os.fspath(path)
+        raise err
+
+
 def _writable_mode(path: str | os.PathLike, target: str) -> int | None:
     """The permission bits of the existing ``target`` (``None`` when new); a read-only file is refused."""
     try:
@@ -226,7 +247,7 @@ def _writable_mode(path: str | os.PathLike, target: str) -> int | None:
 
 def _open_temporary(directory: str, base: str, target: str) -> tuple[str, int]:
     """A new ``.<base>.<pid>.<token>.tmp`` next to ``target``, opened for writing: its path and descriptor."""
-    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0) | getattr(os, "O_NOFOLLOW", 0)
     for _ in range(100):
         tmp = os.path.join(directory, f".{base}.{os.getpid()}.{secrets.token_hex(6)}.tmp")
         try:

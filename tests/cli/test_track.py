@@ -102,13 +102,26 @@ def test_track_a_folder_in_worker_processes_with_one_table(tmp_path):
     (clips / "broken.bvh").write_text("HIERARCHY\nROOT Hips\n")
     out = tmp_path / "solved"
     code, text = run("track", str(clips), "--out", str(out), "--workers", "2", "--no-progress")
-    assert code == 2  # one clip could not be read
+    assert code == 4  # one clip could not be read: the others are written, the exit code says some failed
     lines = text.splitlines()
     assert lines[0].startswith("clip") and "worst joint (p95)" in lines[0]
     assert [line.split()[0] for line in lines[2:6]] == ["blender_chain_zyx_m.bvh", "broken.bvh",
                                                         "walk_zxy.bvh", "wrap_channel.bvh"]
     assert "broken.bvh" in lines[3] and "error:" in lines[3]
-    assert "wrote 3 files" in text
+    assert "1 of 4 clips failed; wrote 3 files" in text
     for name in ("walk_zxy.bvh", "blender_chain_zyx_m.bvh", "wrap_channel.bvh"):
         assert_same_conventions(read_bvh(out / name), read_bvh(DATA / name))
     assert run("track", str(clips), "--out", str(tmp_path / "x.bvh"))[0] == 2
+
+
+def test_track_does_not_write_frames_that_are_not_rotations_unless_forced(tmp_path, monkeypatch, capsys):
+    import gsik.cli.track as track
+    from gsik.anim.retarget_check import RotationCheck
+
+    monkeypatch.setattr(track, "rotation_check", lambda motion: RotationCheck(0.5, "LeftLeg", 2))
+    out = tmp_path / "solved.bvh"
+    code, _ = run("track", str(DATA / "walk_zxy.bvh"), "--out", str(out), "--no-progress")
+    assert code == 3 and not out.exists()
+    assert "frame LeftLeg is not a rotation at clip frame 2" in capsys.readouterr().err
+    code, _ = run("track", str(DATA / "walk_zxy.bvh"), "--out", str(out), "--no-progress", "--force")
+    assert code == 0 and out.exists()
