@@ -22,7 +22,7 @@ from gsik.anim.retarget_check import RetargetCheck
 from gsik.anim.retarget_map import read_mapping
 from gsik.cli.batch import SOME_FAILED, ClipOutcome, batch_exit, folder_clips, format_table, run_batch, summary_line
 from gsik.cli.common import CommandError, load_any_skeleton
-from gsik.errors import ToleranceError
+from gsik.errors import RetargetError, ToleranceError
 from gsik.io.bvh import BvhClip, format_bvh, read_bvh
 from gsik.io.bvh_skeleton import motion_to_bvh
 from gsik.io.out_folder import OutputFolder
@@ -44,10 +44,14 @@ def retarget_clip(args: argparse.Namespace, path: str, frames: int | None = None
     if hasattr(args, "components"):
         _check_learnable(args, path, clip.n_frames)
     mapping = read_mapping(args.map) if args.map else None
-    rt = Retargeter(load_any_skeleton(getattr(args, "onto", "biped")), clip, mapping,
-                    None if args.file_up == "auto" else args.file_up, name=Path(path).name,
-                    limit_margin=math.radians(getattr(args, "limit_margin", 0.0)))
-    return rt.retarget(clip, None if progress is None else lambda i: progress(i + 1, clip.n_frames))
+    try:
+        rt = Retargeter(load_any_skeleton(getattr(args, "onto", "biped")), clip, mapping,
+                        None if args.file_up == "auto" else args.file_up, name=str(path),
+                        limit_margin=math.radians(getattr(args, "limit_margin", 0.0)))
+        return rt.retarget(clip, None if progress is None else lambda i: progress(i + 1, clip.n_frames))
+    except RetargetError as exc:  # name the clip where the retargeter did not
+        message = str(exc)
+        raise RetargetError(message if str(path) in message else f"{path}: {message}") from None
 
 
 def _check_learnable(args: argparse.Namespace, path: str, n_frames: int) -> None:
@@ -55,8 +59,8 @@ def _check_learnable(args: argparse.Namespace, path: str, n_frames: int) -> None
     if n_frames < 2 * CV_SEGMENTS:
         raise CommandError(f"{path}: {n_frames} frames; learning a prior needs at least {2 * CV_SEGMENTS}")
     if isinstance(args.components, int) and args.components > n_frames // 2:
-        raise CommandError(f"--components {args.components}: {path} has {n_frames} frames, which fit at most "
-                           f"{n_frames // 2} components")
+        raise CommandError(f"--components {args.components}: {n_frames} frames fit at most {n_frames // 2} "
+                           f"components ({path})")
 
 
 def verdict(args: argparse.Namespace, path: str, check: RetargetCheck) -> str:

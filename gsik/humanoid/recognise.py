@@ -48,7 +48,7 @@ class Recognition:
 
 def _unit(v: np.ndarray) -> np.ndarray | None:
     n = float(np.linalg.norm(v))
-    return v / n if n > 1e-9 else None
+    return v / n if 1e-9 < n < np.inf else None  # None for no direction, and for non-finite rigs
 
 
 def _snap(v: np.ndarray, degrees: float = 25.0) -> np.ndarray:

@@ -63,7 +63,7 @@ class _Shape:
         """The most alike two branches of ``j`` (as many joints, reaches within :data:`PAIR_TOLERANCE`, at least
         ``least``) and the other branches; None if there are none."""
         bs = self.branches(j)
-        pairs = [(abs(self.branch_reach(a) - self.branch_reach(b)) / self.branch_reach(a), a, b)
+        pairs = [(abs(self.branch_reach(a) - self.branch_reach(b)) / max(self.branch_reach(a), 1e-300), a, b)
                  for i, a in enumerate(bs) for b in bs[i + 1:]
                  if min(self.branch_reach(a), self.branch_reach(b)) >= least and self.size(a) == self.size(b)]
         pairs = [p for p in pairs if p[0] <= PAIR_TOLERANCE]
