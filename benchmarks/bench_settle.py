@@ -140,7 +140,8 @@ def main() -> None:
         cmd += ["--no-posture"] if args.no_posture else []
         rows = {"before": json.loads(subprocess.run(cmd, env=env, capture_output=True, text=True, check=True,
                                                     cwd=os.path.abspath(args.before)).stdout), **rows}
-    print(f"load {os.getloadavg()[0]:.1f}; posture {'off' if args.no_posture else 'natural'}; at most {args.limit} steps")
+    posture = "off" if args.no_posture else "natural"
+    print(f"load {os.getloadavg()[0]:.1f}; posture {posture}; at most {args.limit} steps")
     print(f"{'edit':30s}" + "".join(f" | {k + ': steps':>18s} {'status':>16s} {'err mm':>7s} {'µs/step':>8s}"
                                     for k in rows))
     for name in edits():

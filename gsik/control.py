@@ -218,7 +218,7 @@ class Controller:
             floors[self._balance_level] = 0.5 * (TIGHTEN_FRACTION * BALANCE_TOLERANCE) ** 2
         self._floors = floors
         self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
-        self._stall = StallDetector(np.sqrt(self._near))
+        self._stall = StallDetector(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
 
     # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -337,12 +337,18 @@ class Controller:
             self._stall.reset()  # the pose changed from outside
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
                                        or (not accepted and damping >= MAX_DAMPING)
-                                       or self._stall.creeps(state.met[:-1], state.costs[:-1], accepted))
+                                       or self._stall.creeps(self._unmet(state), state.costs, accepted))
         stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm)
         # A held pose is kept until the targets change: the same step again would hold again, and a creep that
         # was taken stops (a frame asked for anyway changes nothing).
         self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
         return stats
+
+    def _unmet(self, state: LevelState) -> np.ndarray:
+        """(L + 1,) True for each level still to be met: the posture (when on) always is."""
+        unmet = ~state.met
+        unmet[-1] = self._posture is not None
+        return unmet
 
     def _holds(self, q, W, damping) -> bool:
         """True if the last step held the pose ``q`` at ``W`` with this damping: a step now would do the same."""

@@ -14,37 +14,39 @@ import numpy as np
 
 #: A stall is judged over this many steps taken ...
 STALL_WINDOW = 10
-#: ... in which no unmet target level's weighted error norm fell by this fraction of that norm at its tolerances,
-#: nor of its own size: at that pace it would need hundreds of frames to move by one tolerance or to halve.
+#: ... in which no unmet level's weighted error norm fell by this fraction of that norm at its tolerances ...
 STALL_PROGRESS = 0.05
+#: ... nor by this fraction of its own size: at that pace it would need hundreds of frames to move by one
+#: tolerance, or some 350 to halve (a pole 0.3 m off, its joint swinging 2 mm a frame, still closes in).
+STALL_SHRINK = 0.02
 
 
 class StallDetector:
-    """The target levels' error norms over the last steps, and whether they creep.
+    """The levels' error norms over the last steps, and whether they creep.
 
     Args:
-        tolerance_norms: (L,) each target level's weighted error norm ``sqrt(0.5 e^T W e)`` with every error at
-            its tolerance.
+        tolerance_norms: (K,) each level's weighted error norm ``sqrt(0.5 e^T W e)`` with every error at its
+            tolerance (0 for a level without tolerances, the posture: only its own size counts).
     """
 
     def __init__(self, tolerance_norms: np.ndarray):
         self._enough = STALL_PROGRESS * np.asarray(tolerance_norms, dtype=float)
-        # (unmet levels (L,) bool, every target level's error norm (L,)) after each of the last steps taken.
+        # (unmet levels (K,) bool, every level's error norm (K,)) after each of the last steps taken.
         self._history: collections.deque = collections.deque(maxlen=STALL_WINDOW + 1)
 
     def reset(self) -> None:
         """Forget the steps so far (the targets or the pose changed from outside)."""
         self._history.clear()
 
-    def creeps(self, met: np.ndarray, costs: np.ndarray, taken: bool) -> bool:
-        """True if over the last :data:`STALL_WINDOW` steps taken no unmet target level gained enough.
+    def creeps(self, unmet: np.ndarray, costs: np.ndarray, taken: bool) -> bool:
+        """True if over the last :data:`STALL_WINDOW` steps taken no unmet level gained enough.
 
         Args:
-            met: (L,) True where a target level is within its band (all met: never a stall).
-            costs: (L,) the target levels' weighted squared errors ``0.5 e^T W e`` after this step.
+            unmet: (K,) True where a level is still to be met (none: never a stall).
+            costs: (K,) the levels' weighted squared errors ``0.5 e^T W e`` after this step.
             taken: The step was taken (a refused step adds nothing, but within a creep it is part of it).
         """
-        unmet = ~np.asarray(met, dtype=bool)
+        unmet = np.asarray(unmet, dtype=bool)
         if not unmet.any() or (self._history and not np.array_equal(self._history[-1][0], unmet)):
             self._history.clear()  # a level met or unmet anew starts the count again
         if not unmet.any():
@@ -53,5 +55,5 @@ class StallDetector:
         if taken or not self._history:
             self._history.append((unmet, norms))
         before = self._history[0][1]
-        enough = np.maximum(self._enough, STALL_PROGRESS * before)
+        enough = np.maximum(self._enough, STALL_SHRINK * before)
         return len(self._history) > STALL_WINDOW and bool(np.all((before - norms)[unmet] < enough[unmet]))

@@ -7,15 +7,15 @@ import numpy as np
 import gsik
 from gsik.prior import bundled_prior, use_prior
 from gsik.rotations import matrix_from_axis_angle
-from gsik.stall import STALL_PROGRESS, STALL_WINDOW, StallDetector
+from gsik.stall import STALL_SHRINK, STALL_WINDOW, StallDetector
 
 TOLERANCE_NORMS = np.array([1e-4, 1e-4])
 
 
 def _run(detector, norms_per_step, met=(True, False)) -> list[bool]:
     """``creeps`` after each step of target level norms ``norms_per_step``."""
-    met = np.array(met)
-    return [detector.creeps(met, np.asarray(n) ** 2, True) for n in norms_per_step]  # costs whose roots are n
+    unmet = ~np.array(met)
+    return [detector.creeps(unmet, np.asarray(n) ** 2, True) for n in norms_per_step]  # costs whose roots are n
 
 
 def test_steps_that_gain_less_than_the_threshold_creep_after_the_window():
@@ -31,7 +31,7 @@ def test_steps_that_close_in_never_creep():
 
 
 def test_a_large_error_shrinking_by_more_than_its_share_is_progress_but_less_is_a_creep():
-    gain = 2 * STALL_PROGRESS / STALL_WINDOW  # per step, relative
+    gain = 2 * STALL_SHRINK / STALL_WINDOW  # per step, relative
     d = StallDetector(TOLERANCE_NORMS)
     assert not any(_run(d, [[0.0, 0.01 * (1 - gain) ** k] for k in range(3 * STALL_WINDOW)]))
     d = StallDetector(TOLERANCE_NORMS)
@@ -42,9 +42,9 @@ def test_all_levels_met_or_a_level_met_anew_starts_again():
     d = StallDetector(TOLERANCE_NORMS)
     creeping = [[0.0, 3e-4]] * (STALL_WINDOW + 1)
     assert _run(d, creeping)[-1]
-    assert not d.creeps(np.array([True, True]), np.zeros(2), True)
+    assert not d.creeps(np.array([False, False]), np.zeros(2), True)
     assert not any(_run(d, creeping[:STALL_WINDOW]))
-    assert not d.creeps(np.array([False, False]), np.array([1e-8, 1e-8]), True)  # level 0 unmet anew
+    assert not d.creeps(np.array([True, True]), np.array([1e-8, 1e-8]), True)  # level 0 unmet anew
 
 
 def test_one_level_still_closing_in_is_no_stall():
