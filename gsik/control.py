@@ -337,7 +337,7 @@ class Controller:
             self._stall.reset()  # the pose changed from outside
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
                                        or (not accepted and damping >= MAX_DAMPING)
-                                       or self._stall.creeps(self._unmet(state), state.costs, accepted))
+                                       or self._stall.creeps(self._unmet(state), state.costs))
         stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm)
         # A held pose is kept until the targets change: the same step again would hold again, and a creep that
         # was taken stops (a frame asked for anyway changes nothing).

@@ -12,7 +12,7 @@ import collections
 
 import numpy as np
 
-#: A stall is judged over this many steps taken ...
+#: A stall is judged over this many steps, taken or refused (a run of refusals while the damping climbs is one) ...
 STALL_WINDOW = 10
 #: ... in which no unmet level's weighted error norm fell by this fraction of that norm at its tolerances ...
 STALL_PROGRESS = 0.05
@@ -38,13 +38,12 @@ class StallDetector:
         """Forget the steps so far (the targets or the pose changed from outside)."""
         self._history.clear()
 
-    def creeps(self, unmet: np.ndarray, costs: np.ndarray, taken: bool) -> bool:
-        """True if over the last :data:`STALL_WINDOW` steps taken no unmet level gained enough.
+    def creeps(self, unmet: np.ndarray, costs: np.ndarray) -> bool:
+        """True if over the last :data:`STALL_WINDOW` steps (taken or refused) no unmet level gained enough.
 
         Args:
             unmet: (K,) True where a level is still to be met (none: never a stall).
             costs: (K,) the levels' weighted squared errors ``0.5 e^T W e`` after this step.
-            taken: The step was taken (a refused step adds nothing, but within a creep it is part of it).
         """
         unmet = np.asarray(unmet, dtype=bool)
         if not unmet.any() or (self._history and not np.array_equal(self._history[-1][0], unmet)):
@@ -52,8 +51,7 @@ class StallDetector:
         if not unmet.any():
             return False
         norms = np.sqrt(costs)
-        if taken or not self._history:
-            self._history.append((unmet, norms))
+        self._history.append((unmet, norms))
         before = self._history[0][1]
         enough = np.maximum(self._enough, STALL_SHRINK * before)
         return len(self._history) > STALL_WINDOW and bool(np.all((before - norms)[unmet] < enough[unmet]))

@@ -15,7 +15,7 @@ TOLERANCE_NORMS = np.array([1e-4, 1e-4])
 def _run(detector, norms_per_step, met=(True, False)) -> list[bool]:
     """``creeps`` after each step of target level norms ``norms_per_step``."""
     unmet = ~np.array(met)
-    return [detector.creeps(unmet, np.asarray(n) ** 2, True) for n in norms_per_step]  # costs whose roots are n
+    return [detector.creeps(unmet, np.asarray(n) ** 2) for n in norms_per_step]  # costs whose roots are n
 
 
 def test_steps_that_gain_less_than_the_threshold_creep_after_the_window():
@@ -42,9 +42,9 @@ def test_all_levels_met_or_a_level_met_anew_starts_again():
     d = StallDetector(TOLERANCE_NORMS)
     creeping = [[0.0, 3e-4]] * (STALL_WINDOW + 1)
     assert _run(d, creeping)[-1]
-    assert not d.creeps(np.array([False, False]), np.zeros(2), True)
+    assert not d.creeps(np.array([False, False]), np.zeros(2))
     assert not any(_run(d, creeping[:STALL_WINDOW]))
-    assert not d.creeps(np.array([True, True]), np.array([1e-8, 1e-8]), True)  # level 0 unmet anew
+    assert not d.creeps(np.array([True, True]), np.array([1e-8, 1e-8]))  # level 0 unmet anew
 
 
 def test_one_level_still_closing_in_is_no_stall():
