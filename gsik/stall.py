@@ -13,11 +13,11 @@ import collections
 import numpy as np
 
 #: A stall is judged over this many steps, taken or refused (a run of refusals while the damping climbs is one) ...
-STALL_WINDOW = 10
+STALL_WINDOW = 6
 #: ... in which no unmet level's weighted error norm fell by this fraction of that norm at its tolerances ...
 STALL_PROGRESS = 0.05
-#: ... nor by this fraction of its own size: at that pace it would need hundreds of frames to move by one
-#: tolerance, or some 350 to halve (a pole 0.3 m off, its joint swinging 2 mm a frame, still closes in).
+#: ... nor by this fraction of its own size: at that pace it would need over a hundred frames to move by one
+#: tolerance, or some 200 to halve (a pole 0.3 m off, its joint swinging 2 mm a frame, still closes in).
 STALL_SHRINK = 0.02
 
 
