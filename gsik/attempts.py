@@ -71,6 +71,8 @@ class AttemptPolicy:
         self._ws.x[:] = 0.0
         self._ws.lam[0] = self._settings.damping
         self._remember_settled(stats)
+        # What the next solve may start from warm: this one's pose under this posture, if it converged.
+        self._warm = (self._q.tobytes(), self._posture) if _status(stats) is Status.CONVERGED else None
         return self._solve_result(stats, attempts)
 
     def _solve_result(self, stats: np.ndarray, attempts: int) -> SolveResult:
@@ -90,11 +92,18 @@ class AttemptPolicy:
         attempts = 1
         if _status(stats) is not Status.CONVERGED and restarts:
             stats, attempts = self._restart(start, stats)
-        elif restarts and self._posture is not None and self._attempt_rank(stats)[-1] > 0.0 \
-                and not self._starts_at_posture(start):
+        elif restarts and self._posture is not None and not self._warm_start(start) \
+                and self._attempt_rank(stats)[-1] > 0.0 and not self._starts_at_posture(start):
             stats, attempts = self._posture_attempt(stats)
         stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
         return stats, attempts
+
+    def _warm_start(self, start: np.ndarray) -> bool:
+        """True if ``start`` (n_dofs,) [rad] is the pose the last solve converged to, under the same posture: it
+        chose that pose's branch over the posture's then, and a converged attempt from it needs no second one from
+        the posture (a drag's solve per frame: one attempt, not two)."""
+        warm = self._warm
+        return warm is not None and warm[1] is self._posture and warm[0] == start.tobytes()
 
     def _remember_settled(self, stats: np.ndarray) -> None:
         """Keep a best reach (a stalled solve) so that the same solve again from it does no work."""

@@ -12,13 +12,15 @@ angles and solves the levels in strict order (:func:`gsik.priority.prioritized_s
 
 A step is kept only if it leaves every level no worse, in order
 (:func:`gsik.acceptance.compare`). Otherwise it is halved, then refused and
-the damping raised (Levenberg-Marquardt, as the fast path does). A level
-within its tolerances takes full Gauss-Newton steps (the base damping): it is
-a constraint to stay on, and a damping raised for a lower level must not stop
-it closing in. A step that changes nothing, or is refused at the largest
-damping, holds the pose (as a refused step of the fast path does), and holding
-is remembered, so a held target settles at its best reach instead of
-jittering, and a held step costs nothing.
+the damping raised (Levenberg-Marquardt, as the fast path does); a full step
+made worse only by the posture's move gives way to the target levels' step
+alone first. A level within its tolerances takes full Gauss-Newton steps (the
+base damping): it is a constraint to stay on, and a damping raised for a lower
+level must not stop it closing in. A step that changes nothing, or is refused
+at the largest damping, or ends a run of steps that only creep
+(:mod:`gsik.stall`), holds the pose (as a refused step of the fast path does),
+and holding is remembered, so a held target settles at its best reach instead
+of jittering, and a held step costs nothing.
 """
 
 from __future__ import annotations
@@ -29,18 +31,26 @@ import numpy as np
 
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
 from gsik.kernels import kinematics as kernels
-from gsik.kernels.step import ADAPTIVE_FLOOR
 from gsik.errors import SolverError
 from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
     support_polygon
 from gsik.kinematics import kinematic_model, topology
 from gsik.priority import Level, posture_factor, prioritized_step
 from gsik.rotations import transform
+from gsik.stall import StallDetector, unmet_levels
 
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
 #: Largest adaptive damping (the fast path's too): a step refused at it holds the pose.
 MAX_DAMPING = 1e6
+#: While steps succeed the adaptive damping falls to this fraction of ``settings.damping`` (the fast path's floor is
+#: 0.1): near a fold of a target's reach (a straight spine raising the head, a straight leg) the smallest singular
+#: value of a level seen in what the levels above leave it is ~3e-3, and a step closes only ``s^2 / (s^2 + lam)`` of
+#: what is left in that direction: at the fast path's floor (1e-4) 7% a frame (a 15 degree head turn crept for 300
+#: frames); at this one, Gauss-Newton (8 frames).
+DAMPING_FLOOR = 1e-3
+#: A full step taken lowers the adaptive damping by this factor: from the largest to the floor in 20 steps.
+DAMPING_FALL = 0.25
 #: A met level's tightening counts only if it lowers the level's cost by more than errors of this fraction of
 #: the tolerances would cost: pins close in to far under their tolerance, then hold.
 TIGHTEN_FRACTION = 0.01
@@ -138,8 +148,9 @@ class Controller:
         self._root = skeleton.frame_of(skeleton.root)
         self._state_cache = None  # (q, world_from_root, LevelState) of the last accepted pose
         self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
-        self._rest_damping = False  # True: the next step starts from the base damping (new targets for a held pose)
-        self._last_held = False  # the last step held the pose
+        # _rest_damping: the next step starts from the base damping (new targets for a held pose); _last_held: the
+        # last step held the pose.
+        self._rest_damping = self._last_held = False
         self._layout = None  # (effector names, result names, task index of each) for results
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
@@ -181,6 +192,7 @@ class Controller:
             self._row_w = row_w
             self._thresholds()
         self._state_cache = self._held = None
+        self._stall.reset()
         # A held pose's damping (up to MAX_DAMPING) was learnt on the old targets: new ones start afresh.
         self._rest_damping = self._last_held
 
@@ -211,6 +223,7 @@ class Controller:
             floors[self._balance_level] = 0.5 * (TIGHTEN_FRACTION * BALANCE_TOLERANCE) ** 2
         self._floors = floors
         self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
+        self._stall = StallDetector(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
 
     # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -325,11 +338,17 @@ class Controller:
         else:
             step_norm, state = 0.0, state0
         self._adapt_damping(lam, damping, verdict, accepted, tries)
-        # Held: nothing would change, or even the largest damping's step is refused (the fast path's stall).
+        # Held: nothing would change, or even the largest damping's step is refused (the fast path's stall), or
+        # the steps only creep (gsik.stall).
+        if not fresh:
+            self._stall.reset()  # the pose changed from outside
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
-                                       or (not accepted and damping >= MAX_DAMPING))
+                                       or (not accepted and damping >= MAX_DAMPING)
+                                       or self._stall.creeps(unmet_levels(state.met, self._posture is not None), state.costs))
         stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm)
-        self._held = (q.copy(), W.copy(), lam[0], stats) if held and not accepted else None
+        # A held pose is kept until the targets change: the same step again would hold again, and a creep that
+        # was taken stops (a frame asked for anyway changes nothing).
+        self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
         self._last_held = held
         return stats
 
@@ -350,8 +369,21 @@ class Controller:
             trial = self._trial(q, q + dq, W, state0, dampings)
             if trial[0][0] != WORSE or not self._settings.adaptive_damping:
                 return tries, trial
+            if tries == 0 and self._posture is not None:
+                targets = self._targets_alone(q, W, levels, box, state0, dampings)
+                if targets is not None:
+                    return 0, targets
             dq = 0.5 * dq
         return tries, self._correction(q, W, levels, box, state0, dampings) or trial
+
+    def _targets_alone(self, q, W, levels, box, state0: LevelState, dampings) -> tuple | None:
+        """The trial of the target levels' step alone (the posture's left out), if it is better for them, else
+        ``None``. A full step is worse when the posture's move, flat only to first order, costs a target level more
+        than the level's own step gains (a target at a fold of its reach: a yawed head on a straight spine); halving
+        it and raising the damping would then damp the target levels' own step too, and they would creep."""
+        dq = prioritized_step(levels[:-1], *box, dampings[:-1])
+        trial = self._trial(q, q + dq, W, state0, dampings, upto=len(self._levels))
+        return trial if trial[0][0] == BETTER else None
 
     def _correction(self, q, W, levels, box, state0: LevelState, dampings) -> tuple | None:
         """The trial of the step of the met levels above the first unmet one alone, if it tightens them (a lower
@@ -368,7 +400,7 @@ class Controller:
         """Levenberg-Marquardt on ``lam`` (1,): lower it after a full step taken, raise it after a worse one."""
         s = self._settings
         if accepted and s.adaptive_damping:
-            lam[0] = max(damping * 0.5, s.damping * ADAPTIVE_FLOOR) if tries == 0 else damping
+            lam[0] = max(damping * DAMPING_FALL, s.damping * DAMPING_FLOOR) if tries == 0 else damping
         elif not accepted and verdict == WORSE:
             lam[0] = min(damping * 10.0, MAX_DAMPING)
 

@@ -78,6 +78,7 @@ class Solver(AttemptPolicy):
         self._W = self._check_world_from_root(world_from_root)
         self._targets: dict[str, Target] = {}
         self._settled = None  # (what a solve depended on, its statistics) after a solve ended at a best reach
+        self._warm = None  # (angles, posture) a solve converged to: a solve starting there is warm
         self._work_done = np.zeros(2, dtype=np.int64)  # linearisations and sweeps of the current solve
         self._posture: control.Posture | None = None
         self._balance = False

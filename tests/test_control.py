@@ -276,3 +276,22 @@ def test_a_pinned_pelvis_lowered_within_reach_converges_and_beyond_it_ends_at_th
                                          for n, T in solver.effector_poses().items() if n in STUDIO_PINNED})
             assert not alone.converged
             assert pinned_error == pytest.approx(alone.errors()["pelvis"][0], abs=2e-3)
+
+
+def test_a_warm_solve_with_a_posture_keeps_its_converged_first_attempt(biped):
+    # Frame by frame along a drag, solve() starts from the pose the last solve converged to: that branch was
+    # already chosen over the posture's, so a converged first attempt is the answer (no second one from the
+    # posture); a cold start (another pose) still compares both.
+    solver = Solver(biped)
+    poses = solver.effector_poses()
+    targets = {n: Target.from_transform(poses[n]) for n in ("pelvis", "left_foot")}
+    hand = poses["left_hand"][:3, 3]
+    solver.solve({**targets, "left_hand": Target(hand + [0.0, 0.15, 0.0], position_only=True, priority=1)})
+    solver.set_posture(solver.q)
+    for k in range(1, 6):
+        r = solver.solve({**targets, "left_hand": Target(hand + [0.0, 0.15, 0.01 * k], position_only=True,
+                                                         priority=1)})
+        assert r.converged and r.attempts == (2 if k == 1 else 1), k  # the first after set_posture is cold
+        assert r.errors()["left_hand"][0] < 1e-4 and max(r.errors()[n][0] for n in targets) < 1e-4
+    cold = solver.solve(q0=biped.rest)
+    assert cold.converged and cold.attempts == 2

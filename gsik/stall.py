@@ -1,0 +1,64 @@
+"""The prioritised path's stall detector: steps that only creep are a settled pose.
+
+A target beyond reach by a hair (a head turned about its own centre on a straight spine, a pole off the circle its
+joint can swing on) is approached ever more slowly: each step is better, so the acceptance rule
+(:mod:`gsik.acceptance`) keeps taking them, and the studio's frame loop would run at full load for minutes for a
+change no one can see. :class:`StallDetector` calls such a run of steps a stall.
+"""
+
+from __future__ import annotations
+
+import collections
+
+import numpy as np
+
+#: A stall is judged over this many steps, taken or refused (a run of refusals while the damping climbs is one) ...
+STALL_WINDOW = 6
+#: ... in which no unmet level's weighted error norm fell by this fraction of that norm at its tolerances ...
+STALL_PROGRESS = 0.05
+#: ... nor by this fraction of its own size: at that pace it would need over a hundred frames to move by one
+#: tolerance, or some 200 to halve (a pole 0.3 m off, its joint swinging 2 mm a frame, still closes in).
+STALL_SHRINK = 0.02
+
+
+class StallDetector:
+    """The levels' error norms over the last steps, and whether they creep.
+
+    Args:
+        tolerance_norms: (K,) each level's weighted error norm ``sqrt(0.5 e^T W e)`` with every error at its
+            tolerance (0 for a level without tolerances, the posture: only its own size counts).
+    """
+
+    def __init__(self, tolerance_norms: np.ndarray):
+        self._enough = STALL_PROGRESS * np.asarray(tolerance_norms, dtype=float)
+        # (unmet levels (K,) bool, every level's error norm (K,)) after each of the last steps taken.
+        self._history: collections.deque = collections.deque(maxlen=STALL_WINDOW + 1)
+
+    def reset(self) -> None:
+        """Forget the steps so far (the targets or the pose changed from outside)."""
+        self._history.clear()
+
+    def creeps(self, unmet: np.ndarray, costs: np.ndarray) -> bool:
+        """True if over the last :data:`STALL_WINDOW` steps (taken or refused) no unmet level gained enough.
+
+        Args:
+            unmet: (K,) True where a level is still to be met (none: never a stall).
+            costs: (K,) the levels' weighted squared errors ``0.5 e^T W e`` after this step.
+        """
+        unmet = np.asarray(unmet, dtype=bool)
+        if not unmet.any() or (self._history and not np.array_equal(self._history[-1][0], unmet)):
+            self._history.clear()  # a level met or unmet anew starts the count again
+        if not unmet.any():
+            return False
+        norms = np.sqrt(costs)
+        self._history.append((unmet, norms))
+        before = self._history[0][1]
+        enough = np.maximum(self._enough, STALL_SHRINK * before)
+        return len(self._history) > STALL_WINDOW and bool(np.all((before - norms)[unmet] < enough[unmet]))
+
+
+def unmet_levels(met: np.ndarray, posture_on: bool) -> np.ndarray:
+    """(L + 1,) True for each level still to be met, from ``met`` (L + 1,): the posture (when on) always is."""
+    unmet = ~np.asarray(met, dtype=bool)
+    unmet[-1] = posture_on
+    return unmet
