@@ -27,12 +27,12 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from functools import cached_property
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from gsik.errors import GsikFileError, PriorError, choices
+from gsik.io.bundled import bundled_dir
 from gsik.skeleton import Skeleton
 
 #: Smallest variance of any angle [rad^2] ((0.02 rad)^2, about 1 degree).
@@ -197,7 +197,7 @@ def read_npz(path: str | os.PathLike, what: str, format: int, needed: tuple[str,
 
 def bundled_prior_path(skeleton: str = "biped") -> Path:
     """Where the prior bundled for ``skeleton`` lives (``skeletons/<name>_prior.npz``)."""
-    return Path(str(resources.files("gsik.skeletons"))) / f"{skeleton}_prior.npz"
+    return bundled_dir() / f"{skeleton}_prior.npz"
 
 
 def bundled_prior(skeleton: str = "biped") -> PosePrior:

@@ -42,7 +42,7 @@ def test_add_move_delete_key_are_each_one_undo_step_and_undo_exactly(doc):
     keyed = dict(tl.keys)
     tl.move_key(20, 30)
     tl.delete_key(0)
-    assert texts(doc) == ["Add key at frame 0", "Move left_hand", "Add key at frame 20", "Move key 20 to 30",
+    assert texts(doc) == ["Add key at frame 0", "Move left hand", "Add key at frame 20", "Move key 20 to 30",
                           "Delete key at frame 0"]
     assert sorted(tl.keys) == [30]
     doc.undo()

@@ -129,7 +129,7 @@ def test_an_edit_while_playing_stops_the_clock(doc, clock):
     doc.set_root("left_foot")
     clock.t += 4 / 30
     assert not tl.tick() and not tl.playing and tl.frame == 4
-    assert [c.text for c in doc.history.commands] == ["Load Reach", "Reach", "Root on left_foot"]
+    assert [c.text for c in doc.history.commands] == ["Load Reach", "Reach", "Root on left foot"]
 
 
 def test_a_motion_of_another_skeleton_is_refused(doc):
