@@ -268,8 +268,7 @@ class Document:
             raise ValueError(f"axis must be one of {choices(WORLD_AXES)}, got {axis!r}")
         t = self._effector(name)
         R = matrix_from_axis_angle(np.array(WORLD_AXES[axis]), angle) @ t.rotation
-        self.set_target(name, t.replace(orientation=R),
-                        f"Rotate {words(name)} about {axis}")
+        self.set_target(name, t.replace(orientation=R), f"Rotate {words(name)} about {axis}")
 
     def set_target_options(self, name: str, *, enabled: bool | None = None, weight: float | None = None,
                            position_only: bool | None = None, priority: int | None = None) -> None:
