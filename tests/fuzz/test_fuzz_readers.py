@@ -14,7 +14,7 @@ import gsik
 from fuzzing import HOSTILE, MAX_MESSAGE, check_refusal, fuzz, pose_of, seeds
 from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import import_bvh
-from gsik.io.pose import pose_from_yaml, pose_to_yaml, read_pose, write_pose
+from gsik.io.pose import pose_from_yaml, read_pose, write_pose
 from gsik.io.urdf import read_urdf
 from gsik.io.urdf_skeleton import skeleton_from_urdf
 
