@@ -81,3 +81,11 @@ def fit_prior_by_performer(poses: Mapping[str, np.ndarray], skeleton: Skeleton, 
     a = choose_shrinkage(centred) if shrinkage is None else float(shrinkage)
     return PosePrior(skeleton.name, tuple(skeleton.dof_names), means.mean(axis=0), regularised(S, a),
                      int(sum(len(Q) for Q in groups)), a, source)
+
+
+def learn_prior(poses: Mapping[str, np.ndarray], skeleton: Skeleton, source: str = "") -> PosePrior:
+    """The bundled prior's recipe (what won leave-one-performer-out, ``benchmarks/bench_prior.py``): each
+    performer's poses (performer -> (n_p, n_dofs) [rad]) with their mirror images, the performer normalised
+    away (:func:`fit_prior_by_performer`)."""
+    return fit_prior_by_performer({p: np.concatenate([Q, mirror_poses(Q, skeleton)]) for p, Q in poses.items()},
+                                  skeleton, source=source)

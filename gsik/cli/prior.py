@@ -3,17 +3,24 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import TextIO
 
 import gsik
+from gsik.anim.mocap_set import by_performer, retarget_clips, strided
 from gsik.anim.retarget import Retargeted, Retargeter
 from gsik.anim.retarget_map import read_mapping
-from gsik.cli.common import check_out
+from gsik.cli.common import CommandError, check_out
 from gsik.cli.progress import progress_for
 from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import write_motion_bvh
 from gsik.prior import fit_prior, write_prior
+from gsik.prior_variants import learn_prior
 from gsik.prior_mixture import fit_mixture, write_mixture
+
+
+#: Frames kept from each clip when learning from several (neighbouring frames are near copies).
+MANY_STRIDE = 10
 
 
 def add_commands(add, common) -> None:
@@ -30,11 +37,21 @@ def add_commands(add, common) -> None:
     common(p, solver=False)
     p.set_defaults(run=cmd_retarget)
 
-    p = add("learn-prior", "learn the biped's pose prior (a Gaussian over its angles) from a BVH clip",
-            "Retarget the clip onto the biped (as 'gsik retarget') and write the mean and regularised "
-            "covariance of its poses as a .npz pose prior (gsik.prior); the shrinkage is chosen by "
-            "cross-validation over time segments of the clip.")
-    _clip_options(p)
+    p = add("learn-prior", "learn the biped's pose prior (a Gaussian over its angles) from BVH clips or folders",
+            "Retarget the clips onto the biped (as 'gsik retarget') and write the mean and regularised "
+            "covariance of their poses as a .npz pose prior (gsik.prior); the shrinkage is chosen by "
+            "cross-validation over time segments. Several clips or a folder (every .bvh under it): every "
+            "--stride-th frame, each clip's rig recognised on its own, and the poses and their mirror images "
+            "with the performer normalised away (gsik.prior_variants.learn_prior; the bundled prior's recipe).")
+    p.add_argument("clips", nargs="+", metavar="CLIP.bvh|FOLDER", help="a BVH clip of a human rig, several, "
+                   "or folders of them (a CMU 'SSS_TT.bvh' clip belongs to subject SSS, any other to itself)")
+    p.add_argument("--map", metavar="MAP.yaml", help="biped frame -> clip joint entries the heuristics miss "
+                   "(one clip only)")
+    p.add_argument("--file-up", choices=("auto", "y", "z"), default="auto",
+                   help="the clip's up axis (default: detected over the whole clip; one clip only)")
+    p.add_argument("--stride", type=int, metavar="N",
+                   help="keep every N-th frame of each clip (default 1; several clips: 10)")
+    p.add_argument("--cache", metavar="DIR", help="keep each retargeted clip in this folder for the next run")
     p.add_argument("--out", metavar="PRIOR.npz", required=True, help="the pose prior file to write")
     p.add_argument("--frames", type=int, help="use only the clip's first N frames")
     p.add_argument("--source", default="", help="what the clip is and its licence, kept in the file")
@@ -65,10 +82,11 @@ def _clip_options(p: argparse.ArgumentParser) -> None:
                    help="the clip's up axis (default: detected over the whole clip)")
 
 
-def _retarget(args: argparse.Namespace, frames: int | None = None) -> Retargeted:
+def _retarget(args: argparse.Namespace, frames: int | None = None, stride: int = 1) -> Retargeted:
     clip = read_bvh(args.clip)
     if frames:
         clip = type(clip)(clip.joints, clip.frame_time, clip.motion[:frames])
+    clip = strided(clip, stride)
     mapping = read_mapping(args.map) if args.map else None
     rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up,
                     name=args.clip)
@@ -98,7 +116,10 @@ def cmd_retarget(args: argparse.Namespace, out: TextIO) -> int:
 
 def cmd_learn_prior(args: argparse.Namespace, out: TextIO) -> int:
     check_out(args.out, (".npz",), "pose prior")
-    r = _retarget(args, args.frames)
+    if len(args.clips) > 1 or Path(args.clips[0]).is_dir():
+        return _learn_from_many(args, out)
+    args.clip = args.clips[0]
+    r = _retarget(args, args.frames, args.stride or 1)
     _report(r, out)
     if args.components is None:
         prior = fit_prior(r.motion.q, r.motion.skeleton, source=args.source)
@@ -110,4 +131,27 @@ def cmd_learn_prior(args: argparse.Namespace, out: TextIO) -> int:
     write_mixture(mixture, args.out)
     print(f"wrote {args.out}: {mixture.n_frames} poses, {mixture.n_components} components, "
           f"shrinkage {mixture.shrinkage:g}", file=out)
+    return 0
+
+
+def _learn_from_many(args: argparse.Namespace, out: TextIO) -> int:
+    """``learn-prior`` over several clips or folders: every ``--stride``-th frame, by performer."""
+    for option, given in (("--map", args.map), ("--file-up", args.file_up != "auto"), ("--frames", args.frames),
+                          ("--components", args.components)):
+        if given:
+            raise CommandError(f"learn-prior: {option} applies to one clip only; several clips or a folder "
+                                 "are each recognised on their own")
+    stride = args.stride or MANY_STRIDE
+    with progress_for(args, "retarget") as bar:
+        clips = retarget_clips(gsik.load_skeleton("biped"), args.clips, stride, args.cache,
+                               lambda name: bar(0, 1))
+    poses = by_performer(clips)
+    for c in clips:
+        print(f"{c.name:28} performer {c.performer:20} {len(c.q):6} poses", file=out)
+    source = args.source or (f"every {stride}th frame of {len(clips)} clips of {len(poses)} performers: "
+                             + ", ".join(c.name for c in clips))
+    prior = learn_prior(poses, gsik.load_skeleton("biped"), source)
+    write_prior(prior, args.out)
+    print(f"wrote {args.out}: {prior.n_frames} poses of {len(poses)} performers (and their mirror images), "
+          f"every {stride}th frame, shrinkage {prior.shrinkage:g}", file=out)
     return 0
