@@ -15,6 +15,7 @@ to subject ``SSS``; any other file is a performer of its own (its stem).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import re
@@ -108,7 +109,17 @@ def _cache_file(cache: Path, skeleton: Skeleton, path: Path, stride: int) -> Pat
     for a in (skeleton.lower, skeleton.upper, skeleton.rest):
         key.update(np.ascontiguousarray(a, dtype=float).tobytes())
     key.update(repr((skeleton.name, skeleton.dof_names, stride)).encode())
+    key.update(_code_digest())
     return cache / f"{path.stem}-{key.hexdigest()[:16]}.npz"
+
+
+@functools.cache
+def _code_digest() -> bytes:
+    """A digest of gsik's own sources: a cached retargeting is stale once any of them changes."""
+    key = hashlib.sha256()
+    for f in sorted(Path(__file__).resolve().parents[1].rglob("*.py")):
+        key.update(f.read_bytes())
+    return key.digest()
 
 
 def retarget_clips(skeleton: Skeleton, paths: Iterable[str | os.PathLike], stride: int = 1,
@@ -118,7 +129,7 @@ def retarget_clips(skeleton: Skeleton, paths: Iterable[str | os.PathLike], strid
 
     ``cache``: a folder (created if needed) keeping each clip's result for the
     next call, keyed by the clip's contents, the skeleton's limits and rest
-    pose, and the stride (a changed retargeting needs an emptied cache).
+    pose, the stride and gsik's sources.
     ``progress`` is called with each clip's name before it is done.
     """
     out = []
