@@ -133,3 +133,20 @@ def test_the_bundled_prior_is_rebuilt_by_its_one_command(tmp_path):
                                                                     bundled.source)
     np.testing.assert_allclose(rebuilt.mean, bundled.mean, rtol=0, atol=1e-9)
     np.testing.assert_allclose(rebuilt.covariance, bundled.covariance, rtol=0, atol=1e-9)
+
+
+@pytest.mark.skipif(MOCAP is None, reason="the shared motion capture (../shared/mocap) is not beside the repository")
+def test_a_deep_squat_of_the_shared_clips_retargets_with_knees_and_hips_within_2_cm(biped):
+    """001_14 (climbing) crouches deep at its start and tucks at 4.5 s: knees bent 141-152 deg (README)."""
+    from gsik.anim.mocap_set import strided
+    from gsik.anim.retarget import Retargeter
+    from gsik.io.bvh import BvhClip, read_bvh
+
+    full = read_bvh(MOCAP / "cmu" / "001_14.bvh")
+    clip = strided(BvhClip(full.joints, full.frame_time, full.motion[:300]), 10)
+    r = Retargeter(biped, clip).retarget(clip)
+    col = {f: k for k, f in enumerate(r.mapping)}
+    for i, side in ((2, "left"), (3, "left"), (2, "right"), (3, "right"), (4, "right"), (28, "right")):
+        knee = -r.motion.q[i, biped.dof_index(f"{side}_knee.x")]
+        assert knee > np.radians(140), (i, side)  # past the biped's old 137.5 deg
+        assert r.errors[i, col[f"{side}_knee"]] < 0.02 and r.errors[i, col[f"{side}_hip"]] < 0.02, (i, side)
