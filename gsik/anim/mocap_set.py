@@ -124,18 +124,19 @@ def _code_digest() -> bytes:
 
 def retarget_clips(skeleton: Skeleton, paths: Iterable[str | os.PathLike], stride: int = 1,
                    cache: str | os.PathLike | None = None,
-                   progress: Callable[[str], None] | None = None) -> list[RetargetedClip]:
+                   progress: Callable[[int, int], None] | None = None) -> list[RetargetedClip]:
     """Retarget every clip of :func:`clip_paths` ``(paths)``, every ``stride``-th frame.
 
     ``cache``: a folder (created if needed) keeping each clip's result for the
     next call, keyed by the clip's contents, the skeleton's limits and rest
     pose, the stride and gsik's sources.
-    ``progress`` is called with each clip's name before it is done.
+    ``progress(done, total)`` is called before each clip and once at the end.
     """
     out = []
-    for path in clip_paths(paths):
+    paths = clip_paths(paths)
+    for k, path in enumerate(paths):
         if progress is not None:
-            progress(path.name)
+            progress(k, len(paths))
         file = None if cache is None else _cache_file(Path(cache), skeleton, path, stride)
         if file is not None and file.exists():
             with np.load(file, allow_pickle=False) as z:
@@ -148,6 +149,8 @@ def retarget_clips(skeleton: Skeleton, paths: Iterable[str | os.PathLike], strid
             np.savez(file, q=r.q, world_from_root=r.world_from_root, mapped=np.array(r.mapped), targets=r.targets,
                      errors=r.errors)
         out.append(r)
+    if progress is not None:
+        progress(len(paths), len(paths))
     return out
 
 

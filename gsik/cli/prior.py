@@ -152,8 +152,7 @@ def _learn_from_many(args: argparse.Namespace, out: TextIO) -> int:
                                  "are each recognised on their own")
     stride = args.stride or MANY_STRIDE
     with progress_for(args, "retarget") as bar:
-        clips = retarget_clips(gsik.load_skeleton("biped"), args.clips, stride, args.cache,
-                               lambda name: bar(0, 1))
+        clips = retarget_clips(gsik.load_skeleton("biped"), args.clips, stride, args.cache, bar)
     poses = by_performer(clips)
     for c in clips:
         print(f"{c.name:28} performer {c.performer:20} {len(c.q):6} poses", file=out)
