@@ -1,32 +1,40 @@
-"""Naturalness benchmark: learned pose priors against no posture and the rest posture, from few targets.
+"""Naturalness benchmark, leave one performer out: pose priors against no posture and the rest posture.
 
-The real clip (default ``../shared/mocap/mocap_bvhtools_test.bvh`` beside the
-repository) is retargeted onto the biped (:mod:`gsik.anim.retarget`). Its
-frames are cut into ``--folds`` contiguous time segments; for each segment the
-priors are learned from the rest of the clip less ``--gap`` frames either side
-of the segment (so no training pose is a near copy of a test pose), and every
-``--stride``-th pose of the held-out segment is a test pose ``q*``. The biped
-stands on its right foot where ``q*`` puts it (the IK root), the solver gets
-only the targets taken from ``q*`` (full poses) of
+Every clip under ``--mocap`` (default ``../shared/mocap`` beside the
+repository: the bvhtools clip and the CMU subjects 001, 002 and 003, four
+performers; :func:`gsik.anim.mocap_set.performer_of`) is retargeted onto the
+biped, every ``--stride``-th frame (:mod:`gsik.anim.mocap_set`; ``--cache``
+keeps the result outside the repository for the next run). For each performer
+in turn, every prior is learned from the OTHER performers' poses only, and up
+to ``--test-poses`` of the held-out performer's poses, evenly spaced over their
+clips, are the test poses ``q*``. The biped stands on its right foot where
+``q*`` puts it (the IK root), the solver gets only the targets taken from
+``q*`` (full poses) of
 
+* ``hands+feet``: both hands and the left foot (the figure the default is chosen by);
 * ``five``: pelvis, head, both hands and the left foot;
-* ``hands+feet``: both hands and the left foot;
 
-and ``solve()`` starts from the rest pose with no posture, the rest posture
-(``set_posture()``, weight 1), the learned Gaussian (:func:`gsik.prior.use_prior`)
-and the learned mixture of Gaussians (:func:`gsik.prior_mixture.solve_with_mixture`;
-its component count chosen by cross-validation inside the training frames).
-Printed per case: mean and 95th percentile of the joints' position error
-against ``q*`` (every joint but the hips; "interior": knees, elbows,
-shoulders and neck, which no target's pose fixes rigidly), the share of test
-poses whose targets are all met within 1 mm, the largest target error, the
-median step time (the second ``step()`` from the rest pose towards the
-targets; the mixture's includes choosing its component) with its ratio to
-the rest posture's, and the median ``solve()`` time; then the interior error
-per fold, whose spread says how far one clip's figures carry.
+and ``solve()`` starts from the rest pose (2 further attempts) with each posture:
 
-Run: ``python benchmarks/bench_prior.py [--clip PATH] [--folds 5] [--gap 150] [--stride 20] [--cache motion.npz]``
-(retargeting the whole clip takes minutes: ``--cache`` keeps it for the next run).
+* ``none``; ``rest`` (``set_posture()``, weight 1);
+* ``gaussian``: the plain global Gaussian of the training poses (:func:`gsik.prior.fit_prior`);
+* ``mirror``: the Gaussian of the training poses and their mirror images (:func:`gsik.prior_variants.mirror_poses`);
+* ``performer``: the performer normalised away (:func:`gsik.prior_variants.fit_prior_by_performer`);
+* ``mirror+performer``: both;
+* ``knn``: target-conditioned, the local Gaussian of the 64 training poses (and mirrors) whose targeted
+  frames, relative to the root foot, are nearest the targets (:class:`gsik.prior_knn.ConditionedPrior`).
+
+Printed per held-out performer and posture: the interior joints' position
+error against ``q*`` (knees, elbows, shoulders, neck: what no target's pose
+fixes rigidly), mean and 95th percentile [mm]; the test poses whose targets
+are all met within 1 mm; the median step time (the second ``step()`` from the
+rest pose towards the targets, a conditioned prior's conditioning included)
+over the rest posture's. Then, per posture, the rest posture's interior mean
+over the posture's, per performer, and their geometric mean: the default rule
+(a prior is the default only when it is no worse than the rest posture for
+every performer and at least 2x better on their geometric mean).
+
+Run: ``python benchmarks/bench_prior.py [--mocap DIR] [--stride 10] [--test-poses 60] [--cache DIR]``.
 Nothing here is asserted by the tests.
 """
 
@@ -40,55 +48,48 @@ from pathlib import Path
 import numpy as np
 
 from gsik import Solver, Target, load_skeleton
-from gsik.anim.retarget import Retargeter
-from gsik.io.bvh import BvhClip, read_bvh
+from gsik.anim.mocap_set import RetargetedClip, retarget_clips
 from gsik.kinematics import world_frames
-from gsik.prior import PosePrior, fit_prior, segments, use_prior
-from gsik.prior_mixture import PoseMixture, fit_mixture, follow_mixture, solve_with_mixture
+from gsik.prior import fit_prior, use_prior
+from gsik.prior_knn import ConditionedPrior
+from gsik.prior_variants import fit_prior_by_performer, mirror_poses
 
-CLIP = Path(__file__).resolve().parents[1].parent / "shared" / "mocap" / "mocap_bvhtools_test.bvh"
+MOCAP = Path(__file__).resolve().parents[1].parent / "shared" / "mocap"
 TARGET_SETS = {
-    "five": ("pelvis", "head", "left_hand", "right_hand", "left_foot"),
     "hands+feet": ("left_hand", "right_hand", "left_foot"),
+    "five": ("pelvis", "head", "left_hand", "right_hand", "left_foot"),
 }
-POSTURES = ("none", "rest", "prior", "mixture")
-#: Joints whose position the comparison counts: every joint but the top (hips), which the pelvis is.
-JOINTS = ("waist", "neck", "atlas", "left_shoulder", "left_elbow", "right_shoulder", "right_elbow",
-          "left_hip", "left_knee", "left_ankle", "right_hip", "right_knee", "right_ankle")
-#: Interior joints: mid-limb and spine joints no target's pose fixes rigidly (a hip is rigid with the pelvis,
-#: an ankle with its foot, the waist with the pelvis, the atlas with the head).
+POSTURES = ("none", "rest", "gaussian", "mirror", "performer", "mirror+performer", "knn")
+PRIORS = POSTURES[2:]
+#: Interior joints: mid-limb and spine joints no target's pose fixes rigidly.
 INTERIOR = ("left_knee", "right_knee", "left_elbow", "right_elbow", "left_shoulder", "right_shoulder", "neck")
-STEP_SAMPLES = 40
-#: Further attempts of solve() (the default 20 makes a run take hours on the prioritised path); the same for all.
+STEP_SAMPLES = 25
+#: Further attempts of solve(), the same for every posture.
 RESTARTS = 2
 
 
-class Posture:
-    """How one posture kind is set, stepped and solved (the solver's posture; the mixture's component)."""
+def learn(train: dict[str, np.ndarray], sk) -> dict[str, object]:
+    """Every prior of :data:`PRIORS` from the training performers' poses ``train`` (performer -> (n, n_dofs))."""
+    everyone = np.concatenate(list(train.values()))
+    mirrored = {p: np.concatenate([Q, mirror_poses(Q, sk)]) for p, Q in train.items()}
+    both = np.concatenate(list(mirrored.values()))
+    mirror = fit_prior(both, sk)
+    return {"gaussian": fit_prior(everyone, sk), "mirror": mirror,
+            "performer": fit_prior_by_performer(train, sk),
+            "mirror+performer": fit_prior_by_performer(mirrored, sk),
+            "knn": ConditionedPrior(mirror, both)}
 
-    def __init__(self, kind: str, prior: PosePrior, mixture: PoseMixture):
-        self.kind, self.prior, self.mixture, self.component = kind, prior, mixture, None
 
-    def set(self, solver: Solver) -> None:
-        if self.kind == "none":
-            solver.set_posture(None, 0.0)
-        elif self.kind == "rest":
-            solver.set_posture(None, 1.0)
-        elif self.kind == "prior":
-            use_prior(solver, self.prior)
-        else:
-            self.component = follow_mixture(solver, self.mixture)
-
-    def step(self, solver: Solver, targets=None):
-        """One dragging step; the mixture first re-chooses its component for the current pose (timed with it)."""
-        if self.kind == "mixture":
-            self.component = follow_mixture(solver, self.mixture, current=self.component)
-        return solver.step(targets)
-
-    def solve(self, solver: Solver, targets, q0):
-        if self.kind == "mixture":
-            return solve_with_mixture(solver, self.mixture, targets, q0)
-        return solver.solve(targets, q0=q0)
+def set_posture(solver: Solver, kind: str, prior, targets) -> None:
+    """Make posture ``kind`` (``prior`` its learned prior, if any) the solver's, for ``targets``."""
+    if kind == "none":
+        solver.set_posture(None, 0.0)
+    elif kind == "rest":
+        solver.set_posture(None, 1.0)
+    elif kind == "knn":
+        prior.apply(solver, targets)
+    else:
+        use_prior(solver, prior)
 
 
 def _world_from(sk, R: np.ndarray, p: np.ndarray, name: str) -> np.ndarray:
@@ -98,149 +99,98 @@ def _world_from(sk, R: np.ndarray, p: np.ndarray, name: str) -> np.ndarray:
     return T
 
 
-def _case(sk, Q_test, W_test, posture: Posture, names) -> dict:
-    """Solve every test pose for one target set and posture; errors [mm], step and solve times [s]."""
-    joints = [sk.frame_of(j) for j in JOINTS]
-    interior = [JOINTS.index(j) for j in INTERIOR]
-    joint_err, target_err, step_times, solve_times = [], [], [], []
+def run_case(sk, Q_test, W_test, kind: str, prior, names) -> dict:
+    """Solve every test pose for one target set and posture: interior errors [mm], target errors [mm], times [s]."""
+    interior = [sk.frame_of(j) for j in INTERIOR]
+    err, target_err, step_times = [], [], []
     for i, (q, W) in enumerate(zip(Q_test, W_test)):
         R, p = world_frames(sk, q, W, "pelvis")
         solver = Solver(sk, world_from_root=_world_from(sk, R, p, "right_foot"), restarts=RESTARTS)
-        posture.set(solver)
         targets = {n: Target.from_transform(_world_from(sk, R, p, n)) for n in names}
+        set_posture(solver, kind, prior, targets)
         if i < STEP_SAMPLES:  # a dragging step: the second one (the first builds the prioritised controller)
-            posture.step(solver, targets)
+            solver.step(targets)
             t = time.perf_counter()
-            posture.step(solver)
+            if kind == "knn":
+                set_posture(solver, kind, prior, targets)
+            solver.step(targets)
             step_times.append(time.perf_counter() - t)
-            posture.set(solver)
-        t = time.perf_counter()
-        r = posture.solve(solver, targets, sk.rest)
-        solve_times.append(time.perf_counter() - t)
-        got = solver.world_positions()
-        joint_err.append(np.linalg.norm(got[joints] - p[joints], axis=1))
+        r = solver.solve(targets, q0=sk.rest)
+        err.append(np.linalg.norm(solver.world_positions()[interior] - p[interior], axis=1))
         target_err.append(max(r.errors()[n][0] for n in names))
-    e = np.array(joint_err) * 1000.0
-    return dict(all=e, interior=e[:, interior], target=np.array(target_err) * 1000.0, step=np.array(step_times),
-                solve=np.array(solve_times))
+    return dict(interior=np.array(err) * 1000.0, target=np.array(target_err) * 1000.0, step=np.array(step_times))
 
 
-def _met(m: dict) -> str:
-    """How many test poses had all their targets met within 1 mm, of how many."""
-    return f"{np.sum(m['target'] < 1.0)} / {len(m['target'])}"
-
-
-def training_frames(n: int, held: np.ndarray, gap: int) -> np.ndarray:
-    """Frames ``range(n)`` outside the held-out segment ``held`` and ``gap`` frames either side of it."""
-    keep = np.ones(n, dtype=bool)
-    keep[max(held[0] - gap, 0):held[-1] + gap + 1] = False
-    return np.flatnonzero(keep)
+def test_poses(clips: list[RetargetedClip], performer: str, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Up to ``n`` of ``performer``'s poses (n, n_dofs) and pelvis transforms (n, 4, 4), evenly spaced."""
+    Q = np.concatenate([c.q for c in clips if c.performer == performer])
+    W = np.concatenate([c.world_from_root for c in clips if c.performer == performer])
+    keep = np.unique(np.linspace(0, len(Q) - 1, min(n, len(Q))).astype(int))
+    return Q[keep], W[keep]
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--clip", type=Path, default=CLIP)
-    ap.add_argument("--folds", type=int, default=5)
-    ap.add_argument("--gap", type=int, default=150, help="frames either side of a held-out segment left out of "
-                    "its training (default 150: 5 s at 30 fps)")
-    ap.add_argument("--stride", type=int, default=20, help="every n-th held-out frame is a test pose")
-    ap.add_argument("--frames", type=int, default=0, help="use only the clip's first n frames (0: all)")
+    ap.add_argument("--mocap", type=Path, default=MOCAP)
+    ap.add_argument("--stride", type=int, default=10, help="retarget every n-th frame of each clip (default 10)")
+    ap.add_argument("--test-poses", type=int, default=60, help="test poses per held-out performer at most")
     ap.add_argument("--targets", choices=tuple(TARGET_SETS), nargs="+", default=tuple(TARGET_SETS))
-    ap.add_argument("--cache", type=Path, help="keep the retargeted motion in this .npz (read it if it exists)")
+    ap.add_argument("--cache", type=Path, default=Path("/tmp/gsik-prior-cache"),
+                    help="folder keeping the retargeted clips (outside the repository)")
     args = ap.parse_args()
     sk = load_skeleton("biped")
-    clip = read_bvh(args.clip)
-    if args.frames:
-        clip = BvhClip(clip.joints, clip.frame_time, clip.motion[:args.frames])
-    Q, W = _retargeted(sk, clip, args.cache)
-    folds = segments(len(Q), args.folds)
-    n_test = sum(len(h[::args.stride]) for h in folds)
-    print(f"## Pose prior: {args.clip.name}, {clip.n_frames} frames, {args.folds} time folds (training leaves "
-          f"{args.gap} frames out either side), every {args.stride}th held-out frame: {n_test} test poses; "
-          f"load {os.getloadavg()[0]:.2f}\n")
+    t = time.perf_counter()
+    clips = retarget_clips(sk, [args.mocap], args.stride, args.cache)
+    performers = sorted({c.performer for c in clips})
+    poses = {p: np.concatenate([c.q for c in clips if c.performer == p]) for p in performers}
+    print(f"## Pose priors, leave one performer out: {len(clips)} clips under {args.mocap}, every "
+          f"{args.stride}th frame retargeted ({time.perf_counter() - t:.0f} s), performers "
+          + ", ".join(f"{p} ({len(poses[p])} poses)" for p in performers)
+          + f"; up to {args.test_poses} test poses each; load {os.getloadavg()[0]:.2f}\n", flush=True)
     warm = Solver(sk)
     warm.set_posture(None, 1.0)
     warm.solve({"left_hand": Target([0.2, 0.3, 1.0])})  # compile before timing
-    results = {(s, k): [] for s in args.targets for k in POSTURES}
-    for f, held in enumerate(folds):
-        train = Q[training_frames(len(Q), held, args.gap)]
-        prior = fit_prior(train, sk)
-        mixture = fit_mixture(train, sk, shrinkage=prior.shrinkage)
-        print(f"fold {f}: frames {held[0]}-{held[-1]} held out, {len(train)} training frames, shrinkage "
-              f"{prior.shrinkage:g}, mixture of {mixture.n_components}; held-out log-likelihood Gaussian "
-              f"{_gaussian_ll(prior, Q[held]):.1f}, mixture {mixture.log_likelihood(Q[held]):.1f}", flush=True)
-        test = held[::args.stride]
+    results = {}
+    for held in performers:
+        priors = learn({p: Q for p, Q in poses.items() if p != held}, sk)
+        Q_test, W_test = test_poses(clips, held, args.test_poses)
         for s in args.targets:
-            for k in POSTURES:
-                results[s, k].append(_case(sk, Q[test], W[test], Posture(k, prior, mixture), TARGET_SETS[s]))
+            for kind in POSTURES:
+                results[held, s, kind] = run_case(sk, Q_test, W_test, kind, priors.get(kind), TARGET_SETS[s])
+        print(f"held out {held}: {len(Q_test)} test poses done; load {os.getloadavg()[0]:.2f}", flush=True)
     print(f"\nload {os.getloadavg()[0]:.2f} at the end\n")
-    _print(results, args.targets)
-    _print_folds(results, args.targets)
-    _print_paired(results, args.targets)
+    for s in args.targets:
+        print_performers(results, performers, s)
+        print_rule(results, performers, s)
 
 
-def _gaussian_ll(prior: PosePrior, X: np.ndarray) -> float:
-    """Mean log-likelihood of rows ``X`` under ``prior``, on the mixture's scale (without the 2 pi constant)."""
-    return float(np.mean(-0.5 * (np.linalg.slogdet(prior.covariance)[1] + prior.mahalanobis(X) ** 2)))
-
-
-def _retargeted(sk, clip, cache: Path | None) -> tuple[np.ndarray, np.ndarray]:
-    """The clip's poses on the biped (n, n_dofs) [rad] and the pelvis's transforms (n, 4, 4)."""
-    if cache is not None and cache.exists():
-        with np.load(cache, allow_pickle=False) as z:
-            if len(z["q"]) == clip.n_frames:
-                print(f"retargeted motion read from {cache}\n")
-                return z["q"], z["world_from_root"]
-    t = time.perf_counter()
-    motion = Retargeter(sk, clip).retarget(clip).motion
-    print(f"retargeted in {time.perf_counter() - t:.1f} s\n")
-    if cache is not None:
-        np.savez(cache, q=motion.q, world_from_root=motion.world_from_root)
-    return np.asarray(motion.q), np.asarray(motion.world_from_root)
-
-
-def _print(results, target_sets) -> None:
-    print("| targets | posture | joints mean / p95 [mm] | interior mean / p95 [mm] | targets met (1 mm) "
-          "| largest target error [mm] | step time median [ms] | step time / rest posture's | solve median [ms] |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for s in target_sets:
-        merged = {k: {f: np.concatenate([r[f].ravel() for r in results[s, k]]) for f in results[s, k][0]}
-                  for k in POSTURES}
-        rest_step = np.median(merged["rest"]["step"])
-        for k in POSTURES:
-            m = merged[k]
-            print(f"| {s} | {k} | {m['all'].mean():.1f} / {np.percentile(m['all'], 95):.0f} "
-                  f"| {m['interior'].mean():.1f} / {np.percentile(m['interior'], 95):.1f} "
-                  f"| {_met(m)} | {m['target'].max():.3f} | {1000 * np.median(m['step']):.2f} "
-                  f"| {np.median(m['step']) / rest_step:.2f} | {1000 * np.median(m['solve']):.0f} |")
+def print_performers(results, performers, s) -> None:
+    """Per held-out performer and posture: interior mean / p95, targets met, step time over the rest posture's."""
+    print(f"### {s}: interior mean / p95 [mm], targets met (1 mm), step time / rest posture's\n")
+    print("| posture | " + " | ".join(f"held out {p}" for p in performers) + " |")
+    print("|---|" + "---|" * len(performers))
+    for kind in POSTURES:
+        cells = []
+        for p in performers:
+            m, rest = results[p, s, kind], results[p, s, "rest"]
+            cells.append(f"{m['interior'].mean():.1f} / {np.percentile(m['interior'], 95):.0f}, "
+                         f"{np.sum(m['target'] < 1.0)}/{len(m['target'])}, "
+                         f"{np.median(m['step']) / np.median(rest['step']):.2f}x")
+        print(f"| {kind} | " + " | ".join(cells) + " |")
     print()
 
 
-def _print_folds(results, target_sets) -> None:
-    """Interior mean error [mm] per held-out fold: the spread says how much one clip's figures can be trusted."""
-    n_folds = len(next(iter(results.values())))
-    print("Interior mean error [mm] per held-out fold (min-max over folds in the last column):\n")
-    print("| targets | posture | " + " | ".join(f"fold {f}" for f in range(n_folds)) + " | spread |")
-    print("|---|---|" + "---|" * (n_folds + 1))
-    for s in target_sets:
-        for k in POSTURES:
-            per = [r["interior"].mean() for r in results[s, k]]
-            print(f"| {s} | {k} | " + " | ".join(f"{v:.0f}" for v in per) + f" | {min(per):.0f}-{max(per):.0f} |")
-    print()
-
-
-def _print_paired(results, target_sets, resamples: int = 2000) -> None:
-    """Mixture minus Gaussian, pose by pose (interior mean [mm]), with a bootstrap 95% interval over the poses."""
-    rng = np.random.default_rng(0)
-    print("Mixture minus Gaussian, interior mean error per test pose [mm] (negative: the mixture is better):\n")
-    print("| targets | mean difference | bootstrap 95% interval | poses better / worse by > 1 mm |")
-    print("|---|---|---|---|")
-    for s in target_sets:
-        d = np.concatenate([m["interior"].mean(axis=1) - g["interior"].mean(axis=1)
-                            for m, g in zip(results[s, "mixture"], results[s, "prior"])])
-        boot = d[rng.integers(len(d), size=(resamples, len(d)))].mean(axis=1)
-        lo, hi = np.percentile(boot, [2.5, 97.5])
-        print(f"| {s} | {d.mean():+.2f} | {lo:+.2f} to {hi:+.2f} | {np.sum(d < -1)} / {np.sum(d > 1)} of {len(d)} |")
+def print_rule(results, performers, s) -> None:
+    """Rest posture's interior mean over each prior's, per performer; geometric mean; the default rule."""
+    print(f"### {s}: rest posture's interior mean error / the posture's (above 1: better than rest)\n")
+    print("| posture | " + " | ".join(performers) + " | geometric mean | no worse for all, >= 2x on average |")
+    print("|---|" + "---|" * (len(performers) + 2))
+    for kind in ("none",) + PRIORS:
+        r = np.array([results[p, s, "rest"]["interior"].mean() / results[p, s, kind]["interior"].mean()
+                      for p in performers])
+        g = float(np.exp(np.mean(np.log(r))))
+        ok = "yes" if np.all(r >= 1.0) and g >= 2.0 else "no"
+        print(f"| {kind} | " + " | ".join(f"{v:.2f}" for v in r) + f" | {g:.2f} | {ok} |")
     print()
 
 

@@ -67,19 +67,22 @@ def test_posture_never_costs_target_accuracy(biped):
     assert r.converged and r.errors()["left_hand"][0] < 1e-4
 
 
-@pytest.mark.parametrize("seed", [0, 5, 7, 12, 21, 24])
-def test_the_rest_posture_meets_full_pose_targets_the_plain_solve_meets(biped, seed):
-    # Poses whose five full-pose targets the plain solve meets, which prioritised descent from the rest pose
-    # with the rest posture missed by 8-206 mm within the same attempts.
-    q_star = np.random.default_rng(seed).uniform(biped.lower, biped.upper)
-    poses = Solver(biped, q0=q_star).effector_poses()
-    targets = {n: Target.from_transform(poses[n]) for n in ("pelvis", "head", "left_hand", "right_hand", "left_foot")}
-    plain = Solver(biped, restarts=2)
-    assert plain.solve(targets, q0=biped.rest).converged
-    solver = Solver(biped, restarts=2)
-    solver.set_posture()
-    r = solver.solve(targets, q0=biped.rest)
-    assert r.converged and max(r.errors()[n][0] for n in targets) < 1e-3
+def test_the_rest_posture_meets_full_pose_targets_as_often_as_the_plain_solve(biped):
+    # Random poses' five full-pose targets: prioritised descent from the rest pose with the rest posture once
+    # missed many that the plain solve meets (by 8-206 mm within the same attempts). Neither meets every one
+    # within 2 further attempts; the posture must meet them as often.
+    plain = posture = 0
+    for seed in range(30):
+        q_star = np.random.default_rng(seed).uniform(biped.lower, biped.upper)
+        poses = Solver(biped, q0=q_star).effector_poses()
+        targets = {n: Target.from_transform(poses[n]) for n in ("pelvis", "head", "left_hand", "right_hand",
+                                                                "left_foot")}
+        plain += Solver(biped, restarts=2).solve(targets, q0=biped.rest).converged
+        solver = Solver(biped, restarts=2)
+        solver.set_posture()
+        r = solver.solve(targets, q0=biped.rest)
+        posture += r.converged and max(r.errors()[n][0] for n in targets) < 1e-3
+    assert posture >= plain >= 20
 
 
 def test_posture_weights_zero_turn_it_off_and_bad_ones_are_refused(biped):

@@ -87,8 +87,8 @@ def test_solving_with_the_prior_meets_the_targets_and_returns_its_mean_when_the_
 def test_the_bundled_prior_fits_the_biped_and_says_where_it_came_from():
     prior = bundled_prior("biped")
     prior.check_fits(load_skeleton("biped"))
-    assert "bvhtools" in prior.source and "MIT" in prior.source
-    assert prior.n_frames == 7184
+    assert "bvhtools" in prior.source and "MIT" in prior.source and "CMU" in prior.source
+    assert prior.n_frames == 2 * 1791  # every 10th frame of the shared clips, and their mirror images
     with pytest.raises(PriorError, match="no pose prior is bundled for skeleton 'robot'.*'biped'"):
         bundled_prior("robot")
 

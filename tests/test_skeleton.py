@@ -42,9 +42,23 @@ def test_biped_stands_upright_at_rest(biped):
     assert T[biped.frame_of("right_hand"), 0, 3] > 0 > T[biped.frame_of("left_hand"), 0, 3]
 
 
+def test_the_biped_has_the_ranges_a_kneel_and_a_deep_squat_need(biped):
+    """Human ranges (skeletons/README.md): a kneel needs about 148 deg of hip and 150 deg of knee flexion."""
+    for side in ("left", "right"):
+        assert biped.upper[biped.dof_index(f"{side}_hip.x")] >= np.radians(148)
+        assert biped.lower[biped.dof_index(f"{side}_knee.x")] <= -np.radians(150)
+        assert biped.upper[biped.dof_index(f"{side}_ankle.x")] >= np.radians(20)  # dorsiflexion (AAOS: 20 deg)
+    # the sides mirror each other: a roll (y) or twist (z) limit changes sign, a pitch (x) limit does not
+    for name in biped.dof_names:
+        if name.startswith("left_"):
+            i, j = biped.dof_index(name), biped.dof_index("right_" + name[5:])
+            lo, hi = (biped.lower[i], biped.upper[i]) if name.endswith(".x") else (-biped.upper[i], -biped.lower[i])
+            assert (lo, hi) == (biped.lower[j], biped.upper[j]), name
+
+
 def test_knees_and_elbows_bend_one_way_only(biped):
-    for joint, (lo, hi) in {"left_knee.x": (-2.4, 0.0), "right_knee.x": (-2.4, 0.0),
-                            "left_elbow.x": (0.0, 2.6), "right_elbow.x": (0.0, 2.6)}.items():
+    for joint, (lo, hi) in {"left_knee.x": (-2.79, 0.0), "right_knee.x": (-2.79, 0.0),
+                            "left_elbow.x": (0.0, 2.62), "right_elbow.x": (0.0, 2.62)}.items():
         i = biped.dof_index(joint)
         assert (biped.lower[i], biped.upper[i]) == (lo, hi)
     # A bent knee moves the ankle backwards (-y), a bent elbow moves the hand forwards (+y).

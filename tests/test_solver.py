@@ -263,7 +263,7 @@ def test_bad_settings_name_the_setting(biped, settings_, message):
 def test_initial_angles_are_checked(biped):
     q = biped.rest.copy()
     q[biped.dof_index("left_knee.x")] = 1.0
-    with pytest.raises(gsik.SolverError, match=r"left_knee.x = 1 rad is outside its limits \[-2.4, 0\]"):
+    with pytest.raises(gsik.SolverError, match=r"left_knee.x = 1 rad is outside its limits \[-2.79, 0\]"):
         gsik.Solver(biped, q0=q)
     with pytest.raises(gsik.SkeletonError, match=r"joint angles must have shape \(30,\)"):
         gsik.Solver(biped, q0=np.zeros(3))

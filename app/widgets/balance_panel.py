@@ -71,8 +71,10 @@ def _natural_box(controls, settings: QtCore.QSettings) -> QtWidgets.QCheckBox:
     box.setEnabled(controls.posture.can_be_natural)
     if not box.isEnabled():
         box.setToolTip("No pose prior is bundled for this skeleton: its posture is the rest pose")
-    elif str(settings.value("controls/natural", "true")).lower() == "false":
-        controls.set_natural(False)
+    else:  # remembered, else the model's default (gsik_studio.model.posture.NATURAL_BY_DEFAULT)
+        remembered = str(settings.value("controls/natural", controls.natural)).lower() == "true"
+        if remembered != controls.natural:
+            controls.set_natural(remembered)
 
     def toggled(on: bool) -> None:
         controls.set_natural(on)

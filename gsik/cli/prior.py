@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import functools
 from pathlib import Path
 from typing import TextIO
 
@@ -14,7 +13,7 @@ from gsik.anim.retarget import Retargeted
 from gsik.cli.batch import add_batch_options
 from gsik.cli.common import check_out
 from gsik.cli.progress import progress_for
-from gsik.cli.retarget_batch import learn_prior_folder, retarget_clip, retarget_folder, verdict
+from gsik.cli.retarget_batch import learn_prior_many, retarget_clip, retarget_folder, verdict
 from gsik.io.bvh_skeleton import write_motion_bvh
 from gsik.prior import fit_prior, write_prior
 from gsik.prior_mixture import MAX_COMPONENTS, fit_mixture, write_mixture
@@ -45,15 +44,27 @@ def add_commands(add, common) -> None:
     common(p, solver=False)
     p.set_defaults(run=cmd_retarget)
 
-    p = add("learn-prior", "learn the biped's pose prior (a Gaussian over its angles) from a BVH clip",
-            "Retarget the clip onto the biped (as 'gsik retarget') and write the mean and regularised "
-            "covariance of its poses as a .npz pose prior (gsik.prior); the shrinkage is chosen by "
-            "cross-validation over time segments of the clip. CLIP may be a folder: every clip is retargeted "
-            "in the batch (as 'gsik retarget DIR') and the prior learned from all their frames; --out DIR "
-            "writes DIR/prior.npz.")
-    _clip_options(p)
-    p.add_argument("--out", metavar="PRIOR.npz|DIR", required=True, help="the pose prior file to write")
-    p.add_argument("--frames", type=_frame_count, help="use only the clip's first N frames (N >= 1)")
+    p = add("learn-prior", "learn the biped's pose prior (a Gaussian over its angles) from BVH clips or folders",
+            "Retarget the clips onto the biped (as 'gsik retarget') and write the mean and regularised "
+            "covariance of their poses as a .npz pose prior (gsik.prior); the shrinkage is chosen by "
+            "cross-validation over time segments. Several clips or a folder (every .bvh under it): every "
+            "--stride-th frame, each clip's rig recognised on its own, on a process pool or a Dask cluster "
+            "(as 'gsik retarget DIR'), and the poses and their mirror images "
+            "with the performer normalised away (gsik.prior_variants.learn_prior; the bundled prior's recipe).")
+    p.add_argument("clips", nargs="+", metavar="CLIP.bvh|FOLDER", help="a BVH clip of a human rig, several, "
+                   "or folders of them (a CMU 'SSS_TT.bvh' clip belongs to subject SSS, any other to itself)")
+    p.add_argument("--map", metavar="MAP.yaml", help="biped frame -> clip joint entries the heuristics miss "
+                   "(one clip only)")
+    p.add_argument("--file-up", choices=("auto", "y", "z"), default="auto",
+                   help="the clip's up axis (default: detected over the whole clip; one clip only)")
+    p.add_argument("--stride", type=_frame_count, metavar="N",
+                   help="keep every N-th frame of each clip (default 1; several clips: 10)")
+    p.add_argument("--cache", metavar="DIR", help="keep each retargeted clip in this folder for the next run")
+    p.add_argument("--force", action="store_true", help="use a result even when it is outside its tolerance")
+    add_batch_options(p)
+    p.add_argument("--out", metavar="PRIOR.npz|DIR", required=True,
+                   help="the pose prior file to write (a folder: DIR/prior.npz)")
+    p.add_argument("--frames", type=_frame_count, help="use only the clip's first N frames (N >= 1; one clip only)")
     p.add_argument("--source", default="", help="what the clip is and its licence, kept in the file")
     p.add_argument("--components", type=_components, metavar="K|auto",
                    help="learn a mixture of K Gaussians (gsik.prior_mixture; 'auto': K chosen by cross-validation "
@@ -132,12 +143,12 @@ def cmd_retarget(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def cmd_learn_prior(args: argparse.Namespace, out: TextIO) -> int:
-    fit = functools.partial(_fit_and_write, args)
-    if Path(args.clip).is_dir():
-        return learn_prior_folder(args, out, fit)
+    if len(args.clips) > 1 or Path(args.clips[0]).is_dir():
+        return learn_prior_many(args, out)
+    args.clip = args.clips[0]
     check_out(args.out, (".npz",), "pose prior")
     r = _retarget(args, out, args.frames)
-    print(fit(r.motion.q, args.out, True), file=out)
+    print(_fit_and_write(args, r.motion.q, args.out, True), file=out)
     return 0
 
 

@@ -15,8 +15,9 @@ import math
 from pathlib import Path
 from typing import TextIO
 
-import numpy as np
 
+import gsik
+from gsik.anim.mocap_set import by_performer, clip_paths, retarget_clips
 from gsik.anim.retarget import Retargeted, Retargeter
 from gsik.anim.retarget_check import RetargetCheck
 from gsik.anim.retarget_map import read_mapping
@@ -26,13 +27,16 @@ from gsik.errors import RetargetError, ToleranceError
 from gsik.io.bvh import BvhClip, format_bvh, read_bvh
 from gsik.io.bvh_skeleton import motion_to_bvh
 from gsik.io.out_folder import OutputFolder
-from gsik.prior import CV_SEGMENTS
+from gsik.prior import CV_SEGMENTS, write_prior
+from gsik.prior_variants import learn_prior
 
 #: The retarget summary's columns: the worst mapped joint's p95 error, and the planted-foot slide [m/s].
 RETARGET_COLUMNS = ("frames", "mapped", "worst joint (p95)", "p95 mm", "p95 %", "slide before", "slide after",
                     "check")
 #: The pose prior's file name when ``learn-prior DIR --out`` names a folder.
 PRIOR_NAME = "prior.npz"
+#: Frames kept from each clip when learning from several (neighbouring frames are near copies).
+MANY_STRIDE = 10
 
 
 def retarget_clip(args: argparse.Namespace, path: str, frames: int | None = None, progress=None) -> Retargeted:
@@ -94,11 +98,11 @@ def retarget_one(args: argparse.Namespace, write: bool, path: str) -> ClipOutcom
     return ClipOutcome(name, cells, outputs=((name, bvh_text(args, r).encode("utf-8")),) if write else ())
 
 
-def learn_one(args: argparse.Namespace, path: str) -> ClipOutcome:
-    """Retarget and check one clip for the prior (in a worker): its cells and its angles (n_frames, n_dofs) [rad]."""
-    r = retarget_clip(args, path, args.frames)
-    check = r.check()
-    return ClipOutcome(Path(path).name, _cells(r, check, verdict(args, path, check)), payload=np.asarray(r.motion.q))
+def learn_strided(stride: int, cache: str | None, path: str) -> ClipOutcome:
+    """Retarget every ``stride``-th frame of one clip for the prior (in a worker; ``cache``: see
+    :func:`gsik.anim.mocap_set.retarget_clips`): its poses and performer in the table, the clip as payload."""
+    clip = retarget_clips(gsik.load_skeleton("biped"), [path], stride, cache)[0]
+    return ClipOutcome(Path(path).name, (str(len(clip.q)), clip.performer), payload=clip)
 
 
 def retarget_folder(args: argparse.Namespace, out: TextIO) -> int:
@@ -114,23 +118,35 @@ def retarget_folder(args: argparse.Namespace, out: TextIO) -> int:
     return batch_exit(outcomes)
 
 
-def learn_prior_folder(args: argparse.Namespace, out: TextIO, fit_and_write) -> int:
-    """``gsik learn-prior DIR --out DIR|PRIOR.npz``: every clip retargeted, then one prior from all their frames.
-
-    ``fit_and_write(q, path, follow_symlinks)`` fits the prior to ``q`` (n, n_dofs) [rad], writes it and returns
-    its report line.
-    """
-    clips = folder_clips(args.clip, None)
+def learn_prior_many(args: argparse.Namespace, out: TextIO) -> int:
+    """``gsik learn-prior CLIPS|DIR... --out PRIOR.npz|DIR``: every ``--stride``-th frame of every clip retargeted in
+    the batch (a process pool or a Dask cluster), then one prior by the bundled recipe (the poses by performer,
+    mirrored, the performer normalised away: :func:`gsik.prior_variants.learn_prior`). Exit 4 when some clips
+    failed (the prior is then learned from the others)."""
+    for option, given in (("--map", args.map), ("--file-up", args.file_up != "auto"), ("--frames", args.frames),
+                          ("--components", args.components)):
+        if given:
+            raise CommandError(f"learn-prior: {option} applies to one clip only; several clips or a folder "
+                               "are each recognised on their own")
+    stride = args.stride or MANY_STRIDE
     target = _prior_path(args.out)
-    outcomes = run_batch(args, functools.partial(learn_one, args), clips, "learn-prior").outcomes
-    out.write(format_table(RETARGET_COLUMNS, outcomes, left=(2,)) + "\n")
-    good = [o.payload for o in outcomes if not o.failed]
+    clips = [str(p) for p in clip_paths(args.clips)]
+    work = functools.partial(learn_strided, stride, args.cache)
+    outcomes = run_batch(args, work, clips, "learn-prior").outcomes
+    out.write(format_table(("poses", "performer"), outcomes, left=(1,)) + "\n")
     out.write(summary_line(outcomes, 0, None) + "\n")
+    good = [o.payload for o in outcomes if not o.failed]
     if not good:
-        out.write("no clip retargeted within its tolerance: no prior written\n")
+        out.write("no clip retargeted: no prior written\n")
         return SOME_FAILED
+    poses = by_performer(good)
+    source = args.source or (f"every {stride}th frame of {len(good)} clips of {len(poses)} performers: "
+                             + ", ".join(c.name for c in good))
+    prior = learn_prior(poses, gsik.load_skeleton("biped"), source)
     path, follow = target
-    out.write(fit_and_write(np.concatenate(good), path, follow) + "\n")
+    write_prior(prior, path, follow)
+    out.write(f"wrote {path}: {prior.n_frames} poses of {len(poses)} performers (and their mirror images), "
+              f"every {stride}th frame, shrinkage {prior.shrinkage:g}\n")
     return batch_exit(outcomes)
 
 

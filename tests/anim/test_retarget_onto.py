@@ -105,8 +105,10 @@ def test_the_limit_margin_widens_ball_joints_only_and_lets_a_deep_bend_through()
     motion[:, :3] = t.rig.rest_positions[0]
     spine = [k for k, j in enumerate(t.clip.joints) if j.name == "Spine"][0]
     column = sum(len(j.channels) for j in t.clip.joints[:spine]) + 2  # Spine's Xrotation (ZYX): bend forward
-    motion[:, column] = np.linspace(0.0, 75.0, 8)  # degrees: past the biped's waist range
+    motion[:, column] = np.linspace(0.0, 100.0, 8)  # degrees: past the biped's waist range (80, AAOS)
     clip = clip_of(t.rig, motion)
     tight = Retargeter(biped, clip).retarget(clip)
     loose = Retargeter(biped, clip, limit_margin=np.radians(30.0)).retarget(clip)
-    assert loose.errors.max() < 0.005 < tight.errors.max()
+    # With the human ranges (issue 18) the widened pose stalls up to 8 mm from a shoulder's target (the lowest
+    # priority) while the tight one misses the bend by 59 mm.
+    assert loose.errors.max() < 0.01 < 0.04 < tight.errors.max()

@@ -57,12 +57,17 @@ def _settle(qtbot, window):
 
 
 def _ring_grip(window, dof):
-    """A display point on ``dof``'s ring where the ring runs most across the screen, and its screen tangent (px/rad)."""
+    """A display point on ``dof``'s ring where the ring runs most across the screen, and its screen tangent (px/rad).
+
+    Only points a press there would grab this ring by, to the pixel (not a target's sphere in front, not
+    another ring a rounded pixel away)."""
     rings = window.rings
     axes, centres, pts = rings.ring_world()
     px = rings.project(pts[dof])
     best = None
     for k in range(len(px)):
+        if any(rings.pick(np.round(px[k]) + d) != ("ring", dof) for d in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))):
+            continue
         g = pts[dof][k] - centres[dof]
         moved = centres[dof] + np.cos(0.05) * g + np.sin(0.05) * np.cross(axes[dof], g)
         t = (rings.project(moved[None])[0] - px[k]) / 0.05

@@ -79,3 +79,17 @@ def test_a_skeleton_without_a_bundled_prior_keeps_the_plain_solver():
         c.set_natural(True)
     c.set_posture_strength(0.5)
     np.testing.assert_allclose(doc.solver.posture.reference, sk.rest)
+
+
+def test_when_the_rule_picks_the_rest_posture_the_prior_is_one_click_away(monkeypatch):
+    """Issue 18's rule may pick the rest posture as the default: then a new biped document prefers the rest
+    pose at full strength and the natural toggle switches the bundled prior on."""
+    from gsik_studio.model import posture
+
+    monkeypatch.setattr(posture, "NATURAL_BY_DEFAULT", False)
+    doc = Document()
+    c = doc.controls
+    assert not c.natural and c.posture.can_be_natural and c.posture_strength == NATURAL_STRENGTH
+    np.testing.assert_allclose(doc.solver.posture.reference, doc.skeleton.rest)
+    c.set_natural(True)
+    np.testing.assert_allclose(doc.solver.posture.precision, NATURAL_STRENGTH * bundled_prior("biped").precision)

@@ -92,8 +92,8 @@ def test_info_prints_joints_dofs_limits_effectors_and_segments(biped):
     assert "IK root: right_foot" in text
     assert "effectors (6): head, pelvis, left_hand, right_hand, left_foot, right_foot" in text
     knee = next(line for line in text.splitlines() if line.strip().startswith("left_knee.x"))
-    # Limits in degrees then radians: -2.4 rad is -137.5 degrees.
-    assert knee.split() == ["left_knee.x", "-137.5", "0.0", "-2.9", "-2.4000", "0.0000", "-0.0500"]
+    # Limits in degrees then radians: -2.79 rad is -159.9 degrees.
+    assert knee.split() == ["left_knee.x", "-159.9", "0.0", "-2.9", "-2.7900", "0.0000", "-0.0500"]
     assert "left_thigh: left_hip -> left_knee" in text
     assert "pelvis: hips -> waist, left_hip, right_hip" in text
 
@@ -106,8 +106,8 @@ def test_info_json_is_the_skeleton_as_data(biped):
     assert info["root"] == "right_foot"
     assert info["effectors"] == list(biped.effector_sites)
     elbow = next(d for d in info["dofs"] if d["name"] == "left_elbow.x")
-    assert elbow["joint"] == "left_elbow" and elbow["lower"] == 0.0 and elbow["upper"] == pytest.approx(2.6)
-    assert elbow["upper_deg"] == pytest.approx(np.degrees(2.6))
+    assert elbow["joint"] == "left_elbow" and elbow["lower"] == 0.0 and elbow["upper"] == pytest.approx(2.62)
+    assert elbow["upper_deg"] == pytest.approx(np.degrees(2.62))
     assert len(info["segments"]) == 14
     assert next(j for j in info["joints"] if j["name"] == "neck")["parent"] == "waist"
 

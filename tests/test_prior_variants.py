@@ -1,0 +1,152 @@
+"""Pose priors from several performers (issue 18): mirror images, the performer normalised away, the
+target-conditioned prior, a folder of clips by performer, and the bundled prior's one-command rebuild."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gsik import Solver, Target, load_skeleton
+from gsik.anim.motion import Motion
+from gsik.anim.mocap_set import by_performer, clip_paths, performer_of, retarget_clips
+from gsik.cli import main
+from gsik.errors import GsikFileError
+from gsik.io.bvh import write_bvh
+from gsik.io.bvh_skeleton import motion_to_bvh
+from gsik.kinematics import world_frames
+from gsik.prior import bundled_prior_path, fit_prior, read_prior
+from gsik.prior_knn import ConditionedPrior
+from gsik.prior_variants import fit_prior_by_performer, mirror_poses
+
+MOCAP = next((p / "shared" / "mocap" for p in Path(__file__).resolve().parents[2:4]
+              if (p / "shared" / "mocap" / "cmu").is_dir()), None)
+#: The bundled prior's build: every 10th frame of every shared clip, and what it says it was learned from
+#: (the README's command, "Natural poses").
+BUNDLED_STRIDE = 10
+BUNDLED_SOURCE = ("every 10th frame of the shared motion capture, 4 performers, mirrored: mocap_bvhtools_test.bvh "
+                  "(test data of the bvhtools 1.6.0 package, MIT licence) and 15 clips of subjects 1, 2 and 3 of the "
+                  "CMU Graphics Lab Motion Capture Database (free to use, not to be resold) on the Character "
+                  "Creator rig")
+
+
+@pytest.fixture(scope="module")
+def biped():
+    return load_skeleton("biped")
+
+
+def _random_poses(sk, n: int, seed: int = 0) -> np.ndarray:
+    """Poses (n, n_dofs) inside the limits, a margin from them."""
+    rng = np.random.default_rng(seed)
+    return sk.lower + 0.1 + rng.uniform(size=(n, sk.n_dofs)) * (sk.upper - sk.lower - 0.2)
+
+
+def test_a_mirrored_pose_is_the_mirror_image_of_the_body_and_mirroring_twice_gives_it_back(biped):
+    Q = np.clip(_random_poses(biped, 20), -np.minimum(-biped.lower, biped.upper),
+                np.minimum(-biped.lower, biped.upper))  # inside both sides' limits, so nothing is clipped
+    M = mirror_poses(Q, biped)
+    np.testing.assert_allclose(mirror_poses(M, biped), Q, atol=1e-12)
+    swap = {"left_hand": "right_hand", "right_knee": "left_knee", "head": "head", "left_toe": "right_toe"}
+    for q, m in zip(Q[:5], M[:5]):
+        p = world_frames(biped, q, np.eye(4), "pelvis")[1]
+        pm = world_frames(biped, m, np.eye(4), "pelvis")[1]
+        for name in ("left_hand", "right_knee", "head", "left_toe"):
+            np.testing.assert_allclose(pm[biped.frame_of(swap[name])], p[biped.frame_of(name)] * [-1, 1, 1],
+                                       atol=1e-9)
+
+
+def test_normalising_the_performer_away_keeps_their_stance_out_of_the_covariance(biped):
+    rng = np.random.default_rng(1)
+    base = biped.rest + 0.2
+    spread = 0.05 * rng.normal(size=(biped.n_dofs, biped.n_dofs))
+    a = base + 0.3 + rng.normal(size=(8000, biped.n_dofs)) @ spread.T   # a long performance, stance + 0.3 rad
+    b = base - 0.3 + rng.normal(size=(2000, biped.n_dofs)) @ spread.T   # a short one, stance - 0.3 rad
+    pooled = fit_prior(np.concatenate([a, b]), biped, shrinkage=0.0)
+    by = fit_prior_by_performer({"a": a, "b": b}, biped, shrinkage=0.0)
+    np.testing.assert_allclose(by.mean, base, atol=0.02)              # each performer counts the same
+    assert np.all(np.abs(pooled.mean - base) > 0.15)                  # the long one's stance wins when pooled
+    np.testing.assert_allclose(by.covariance - 4e-4 * np.eye(biped.n_dofs), spread @ spread.T, atol=0.01)
+    assert np.all(np.diag(pooled.covariance) > np.diag(by.covariance) + 0.01)  # the stances' gap counted
+
+
+def test_the_conditioned_prior_prefers_the_training_pose_whose_targets_match(biped):
+    Q = _random_poses(biped, 300, seed=2)
+    prior = ConditionedPrior(fit_prior(Q, biped), Q, k=1)
+    solver = Solver(biped)
+    R, p = world_frames(biped, Q[17], solver.world_from_root, biped.root)
+    targets = {n: Target(p[biped.frame_of(n)]) for n in ("left_hand", "right_hand", "left_foot")}
+    np.testing.assert_array_equal(prior.apply(solver, targets).mean, Q[17])
+    r = solver.solve(targets, q0=biped.rest)
+    assert max(r.errors()[n][0] for n in targets) < 1e-3  # the lowest level: targets are met
+    np.testing.assert_allclose(r.q, Q[17], atol=2e-3)    # and the pose they came from is found
+    assert ConditionedPrior(prior.base, Q, k=64).local(biped, biped.root, solver.world_from_root, {}) is prior.base
+
+
+def _write_clips(folder: Path, names: list[str], frames: int = 24) -> None:
+    """Biped clips (its own names, recognised as a humanoid rig) written as BVH under ``names``."""
+    sk = load_skeleton("biped")
+    t = np.linspace(0.0, 1.0, frames)[:, None]
+    folder.mkdir(parents=True, exist_ok=True)
+    for k, name in enumerate(names):
+        q = np.clip(sk.rest + 0.2 * np.sin(2 * np.pi * t + k + np.arange(sk.n_dofs)), sk.lower, sk.upper)
+        W = np.broadcast_to(np.eye(4), (frames, 4, 4)).copy()
+        W[:, :3, 3] = [0.0, 0.0, 1.0]
+        write_bvh(folder / name, motion_to_bvh(Motion(sk, q, ("pelvis",) * frames, W, 1 / 30), up="y"))
+
+
+def test_a_folder_of_clips_is_retargeted_strided_by_performer_and_cached(tmp_path, biped):
+    _write_clips(tmp_path / "clips", ["001_01.bvh", "001_02.bvh", "solo.bvh"])
+    assert [performer_of(p) for p in clip_paths([tmp_path / "clips"])] == ["001", "001", "solo"]
+    with pytest.raises(GsikFileError, match="no such clip or folder"):
+        clip_paths([tmp_path / "nothing"])
+    clips = retarget_clips(biped, [tmp_path / "clips"], stride=3, cache=tmp_path / "cache")
+    assert [len(c.q) for c in clips] == [8, 8, 8] and len(list((tmp_path / "cache").iterdir())) == 3
+    again = retarget_clips(biped, [tmp_path / "clips"], stride=3, cache=tmp_path / "cache")
+    for c, d in zip(clips, again):
+        np.testing.assert_array_equal(c.q, d.q)
+        assert c.mapped == d.mapped and c.errors.shape == (8, len(c.mapped))
+    assert {p: len(Q) for p, Q in by_performer(clips).items()} == {"001": 16, "solo": 8}
+
+
+def test_learn_prior_over_a_folder_learns_every_performer_and_refuses_one_clip_options(tmp_path, capsys):
+    _write_clips(tmp_path, ["001_01.bvh", "002_01.bvh"])
+    out, text = tmp_path / "prior.npz", io.StringIO()
+    assert main(["learn-prior", str(tmp_path), "--stride", "2", "--out", str(out)], out=text) == 0, text.getvalue()
+    prior = read_prior(out)
+    assert prior.n_frames == 2 * 2 * 12 and "every 2th frame of 2 clips of 2 performers" in prior.source
+    assert "performer 001" in text.getvalue() and "performer 002" in text.getvalue()
+    assert main(["learn-prior", str(tmp_path), "--frames", "5", "--out", str(out)], out=text) == 2
+    assert "--frames applies to one clip only" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(MOCAP is None, reason="the shared motion capture (../shared/mocap) is not beside the repository")
+def test_the_bundled_prior_is_rebuilt_by_its_one_command(tmp_path):
+    """The README's command over every shared clip gives the bundled file (a minute or two: every 10th frame)."""
+    out = tmp_path / "prior.npz"
+    text = io.StringIO()
+    assert main(["learn-prior", str(MOCAP), "--stride", str(BUNDLED_STRIDE), "--out", str(out),
+                 "--source", BUNDLED_SOURCE], out=text) == 0, text.getvalue()
+    rebuilt, bundled = read_prior(out), read_prior(bundled_prior_path("biped"))
+    assert (rebuilt.n_frames, rebuilt.shrinkage, rebuilt.source) == (bundled.n_frames, bundled.shrinkage,
+                                                                    bundled.source)
+    np.testing.assert_allclose(rebuilt.mean, bundled.mean, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(rebuilt.covariance, bundled.covariance, rtol=0, atol=1e-9)
+
+
+@pytest.mark.skipif(MOCAP is None, reason="the shared motion capture (../shared/mocap) is not beside the repository")
+def test_a_deep_squat_of_the_shared_clips_retargets_with_knees_and_hips_within_2_cm(biped):
+    """001_14 (climbing) crouches deep at its start and tucks at 4.5 s: knees bent 141-152 deg (README)."""
+    from gsik.anim.mocap_set import strided
+    from gsik.anim.retarget import Retargeter
+    from gsik.io.bvh import BvhClip, read_bvh
+
+    full = read_bvh(MOCAP / "cmu" / "001_14.bvh")
+    clip = strided(BvhClip(full.joints, full.frame_time, full.motion[:300]), 10)
+    r = Retargeter(biped, clip).retarget(clip)
+    col = {f: k for k, f in enumerate(r.mapping)}
+    for i, side in ((2, "left"), (3, "left"), (2, "right"), (3, "right"), (4, "right"), (28, "right")):
+        knee = -r.motion.q[i, biped.dof_index(f"{side}_knee.x")]
+        assert knee > np.radians(140), (i, side)  # past the biped's old 137.5 deg
+        assert r.errors[i, col[f"{side}_knee"]] < 0.02 and r.errors[i, col[f"{side}_hip"]] < 0.02, (i, side)
