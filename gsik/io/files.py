@@ -82,7 +82,12 @@ STALE_TEMPORARY_AGE = 600.0
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Replace ``path`` with ``text`` (UTF-8) atomically.
+    """Replace ``path`` with ``text`` (UTF-8) atomically: :func:`atomic_write_bytes` of its encoding."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+    """Replace ``path`` with ``data`` atomically.
 
     Writes a temporary file in the same directory, fsyncs it and renames it
     over ``path``; on any failure the temporary file is removed and an
@@ -105,7 +110,7 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     try:
         tmp, fd = _open_temporary(directory, base, target)
         with os.fdopen(fd, "wb") as f:
-            f.write(text.encode("utf-8"))
+            f.write(data)
             f.flush()
             os.fsync(f.fileno())
         if mode is not None:
