@@ -122,6 +122,22 @@ def _imported_armature(path: str):
     return armatures[0]
 
 
+def _mesh_points() -> list[list[float]]:
+    """World positions of every vertex of every skinned mesh, as evaluated (deformed) at the current frame."""
+    import bpy
+
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    points = []
+    for ob in bpy.context.scene.objects:
+        if ob.type != "MESH" or not any(m.type == "ARMATURE" for m in ob.modifiers):
+            continue
+        evaluated = ob.evaluated_get(depsgraph)
+        mesh = evaluated.to_mesh()
+        points += [_vec(evaluated.matrix_world @ v.co) for v in mesh.vertices]
+        evaluated.to_mesh_clear()
+    return points
+
+
 def describe(path: str, times: list[float]) -> dict:
     import bpy
 
@@ -149,6 +165,7 @@ def describe(path: str, times: list[float]) -> dict:
         "frame_range": _vec(action.frame_range) if action else None,
         "fps": fps,
         "meshes": [ob.name for ob in scene.objects if ob.type == "MESH"],
+        "mesh_points": _mesh_points(),
     }
 
 

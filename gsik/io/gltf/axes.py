@@ -15,9 +15,11 @@ from gsik.rotations import matrix_from_quaternion, quaternion_from_rows
 #: (3, 3) file (y up) -> gsik world (z up): +90 degrees about x.
 GSIK_FROM_GLTF = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 GSIK_FROM_GLTF.flags.writeable = False
-_C4 = np.eye(4)
-_C4[:3, :3] = GSIK_FROM_GLTF
-_C4.flags.writeable = False
+#: (4, 4) the same turn as a homogeneous transform.
+GSIK_FROM_GLTF4 = np.eye(4)
+GSIK_FROM_GLTF4[:3, :3] = GSIK_FROM_GLTF
+GSIK_FROM_GLTF4.flags.writeable = False
+_C4 = GSIK_FROM_GLTF4
 
 
 def matrix_from_xyzw(q) -> np.ndarray:

@@ -14,6 +14,7 @@ import numpy as np
 
 from gsik.io.gltf.axes import gltf_from_gsik, xyzw_from_matrix
 from gsik.io.gltf.character import Character
+from gsik.io.gltf.load import gltf_library
 from gsik.io.gltf.model import GltfFile, GltfMesh, GltfNode, GltfPrimitive, GltfSkin, frozen_array
 from gsik.io.gltf.write import BlobBuilder
 from gsik.mannequin import BODY_COLOR, mannequin_mesh
@@ -36,8 +37,7 @@ def _joint_of_frames(sk: Skeleton) -> np.ndarray:
 
 def character_from_skeleton(sk: Skeleton) -> Character:
     """``sk`` with its mannequin body as a skinned glTF character (see the module)."""
-    import pygltflib
-
+    pygltflib = gltf_library()
     frames = sk.frame_transforms(sk.rest)
     world = gltf_from_gsik(frames[sk.joint_frame])  # (n_joints, 4, 4) file axes, the bind pose
     parents = [int(p) for p in sk.joint_parent]
@@ -70,13 +70,13 @@ def character_from_skeleton(sk: Skeleton) -> Character:
     rest_world = np.concatenate([world, np.eye(4)[None]])
     rest_world.flags.writeable = False
     effectors = MappingProxyType({e: e for e in sk.effector_sites})
-    return Character(file, sk, 0, tuple(range(n)), None, effectors, MappingProxyType({}), rest_world)
+    return Character(file, sk, 0, tuple(range(n)), None, effectors, MappingProxyType({}), rest_world,
+                     np.array(sk.rest))
 
 
 def _body_primitive(sk: Skeleton, frames: np.ndarray, blob: BlobBuilder) -> tuple[object, GltfPrimitive]:
     """The mannequin as a glTF primitive (accessors added to ``blob``) and as plain data."""
-    import pygltflib
-
+    pygltflib = gltf_library()
     body = mannequin_mesh(sk)
     file_frames = gltf_from_gsik(frames[body.carrier])  # (n_vertices, 4, 4)
     positions = np.einsum("vij,vj->vi", file_frames[:, :3, :3], body.points) + file_frames[:, :3, 3]
@@ -95,5 +95,6 @@ def _body_primitive(sk: Skeleton, frames: np.ndarray, blob: BlobBuilder) -> tupl
     indices = blob.add(body.triangles.reshape(-1, 1), "SCALAR", target=34963, component=5125)
     primitive = pygltflib.Primitive(attributes=attributes, indices=indices, material=0)
     data = GltfPrimitive(frozen_array(positions), frozen_array(normals), frozen_array(body.triangles, np.int64),
-                         frozen_array(joints, np.int64), frozen_array(weights), frozen_array([*BODY_COLOR, 1.0]), 0)
+                         frozen_array(joints, np.int64), frozen_array(weights), frozen_array([*BODY_COLOR, 1.0]), 0,
+                         frozen_array(body.colors))
     return primitive, data

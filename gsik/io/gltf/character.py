@@ -59,6 +59,7 @@ class Character:
         effectors: Effector name (``"head"`` ...) -> the site that carries it.
         poles: Pole name (``"left_knee"`` ...) -> the joint it bends.
         rest_world: (n_nodes, 4, 4) every node's world transform at rest, in the file's axes.
+        bind_q: (n_dofs,) [rad] the skeleton's angles at the file's rest pose (zeros for a file read).
     """
 
     file: GltfFile
@@ -69,6 +70,7 @@ class Character:
     effectors: Mapping[str, str]
     poles: Mapping[str, str]
     rest_world: np.ndarray
+    bind_q: np.ndarray
 
     @property
     def name(self) -> str:
@@ -107,7 +109,8 @@ def character_from_file(file: GltfFile, overrides: Mapping[str, str] | None = No
     world.flags.writeable = False
     node_of = dict(zip(b.names, b.nodes))  # the builder orders joints its own way
     return Character(file, skeleton, skin, tuple(node_of[n] for n in skeleton.joint_names), recognition, MappingProxyType(effectors),
-                     MappingProxyType(poles), world)
+                     MappingProxyType(poles), world,
+                     np.zeros(skeleton.n_dofs))
 
 
 def _main_skin(file: GltfFile) -> int:

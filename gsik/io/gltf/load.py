@@ -36,6 +36,15 @@ class LoadedFile(NamedTuple):
     buffers: tuple[bytes, ...]
 
 
+def gltf_library():
+    """The ``pygltflib`` module, or a :class:`GltfError` saying how to install it (the ``gltf`` extra)."""
+    try:
+        import pygltflib
+    except ImportError:
+        raise GltfError("reading and writing glTF needs pygltflib: pip install 'gsik[gltf]'") from None
+    return pygltflib
+
+
 def _size_checked(path: str | os.PathLike, limit: int, what: str) -> None:
     """Refuse a file larger than ``limit`` bytes before reading it (a missing file is read_bytes' error)."""
     try:
@@ -67,8 +76,7 @@ def load_gltf_file(path: str | os.PathLike) -> LoadedFile:
 
 def _parse(data: bytes, where: str) -> tuple[object, bytes | None]:
     """``(document, GLB binary chunk or None)`` of a file's bytes."""
-    import pygltflib
-
+    pygltflib = gltf_library()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

@@ -61,6 +61,7 @@ class GltfPrimitive:
         weights: (n_vertices, 4 * k) their weights, summing to 1 per vertex, or ``None``.
         base_color: (4,) RGBA of the material's base colour factor (white without a material).
         material: Index of the material, -1 for none.
+        colors: (n_vertices, 3) RGB vertex colours (``COLOR_0``), or ``None``.
     """
 
     positions: np.ndarray
@@ -70,6 +71,7 @@ class GltfPrimitive:
     weights: np.ndarray | None
     base_color: np.ndarray
     material: int = -1
+    colors: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)

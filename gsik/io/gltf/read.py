@@ -148,8 +148,12 @@ def _primitive(doc, buffers, prim, what: str, where: str) -> GltfPrimitive:
     triangles = _triangles(doc, buffers, prim, n, what, where)
     joints, weights = _influences(doc, buffers, attrs, n, what, where)
     material = _index(prim.material, len(doc.materials or []), f"{what}.material", where)
+    colors = _attribute(doc, buffers, attrs, "COLOR_0", what, where)
+    if colors is not None and (len(colors) != n or colors.shape[1] not in (3, 4)):
+        raise GltfError(f"{where}: {what}.COLOR_0 must have one VEC3 or VEC4 per vertex ({n})")
     return GltfPrimitive(frozen_array(positions), None if normals is None else frozen_array(normals),
-                         frozen_array(triangles, np.int64), joints, weights, _base_color(doc, material), material)
+                         frozen_array(triangles, np.int64), joints, weights, _base_color(doc, material), material,
+                         None if colors is None else frozen_array(np.clip(colors[:, :3], 0.0, 1.0)))
 
 
 def _triangles(doc, buffers, prim, n: int, what: str, where: str) -> np.ndarray:

@@ -20,6 +20,7 @@ from gsik.anim.motion import Motion
 from gsik.errors import GltfError, show_value
 from gsik.io.files import atomic_write_bytes
 from gsik.io.gltf.character import Character
+from gsik.io.gltf.load import gltf_library
 from gsik.io.gltf.pose import NodeTracks, node_tracks
 
 #: A joint whose rotation stays within this of its rest over the motion gets no channel [quaternion units].
@@ -48,8 +49,7 @@ class BlobBuilder:
     def add(self, values: np.ndarray, kind: str, *, bounds: bool = False, target: int | None = None,
             component: int = _FLOAT) -> int:
         """Append ``values`` (count, width) as a new accessor of ``kind`` (``"VEC3"`` ...); returns its index."""
-        import pygltflib
-
+        pygltflib = gltf_library()
         dtype = {_FLOAT: np.float32, 5123: np.uint16, 5125: np.uint32, 5121: np.uint8}[component]
         data = np.ascontiguousarray(values, dtype=dtype)
         self._align()
@@ -67,8 +67,7 @@ class BlobBuilder:
 
     def finish(self) -> None:
         """Make the document's buffers the one blob."""
-        import pygltflib
-
+        pygltflib = gltf_library()
         self._align()
         self.document.buffers = [pygltflib.Buffer(byteLength=len(self.blob))]
 
@@ -110,8 +109,7 @@ def _set_nodes(document, tracks: NodeTracks, frame: int) -> None:
 
 
 def _add_animation(document, blob: BlobBuilder, tracks: NodeTracks, character: Character, name: str) -> None:
-    import pygltflib
-
+    pygltflib = gltf_library()
     rest = character.file.nodes
     times = blob.add(tracks.times[:, None], "SCALAR", bounds=True)
     channels, samplers = [], []
