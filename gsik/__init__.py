@@ -10,6 +10,7 @@ from gsik.errors import (
     GaitError,
     GsikError,
     GsikFileError,
+    HumanoidError,
     PoseError,
     ScenarioError,
     SkeletonError,
@@ -25,7 +26,7 @@ from gsik.targets import Target
 __version__ = "0.1.0"
 
 __all__ = [
-    "BvhError", "GaitError", "GsikError", "ScenarioError", "GsikFileError", "PoseError", "SkeletonError", "SolverError", "TargetError",
+    "BvhError", "GaitError", "GsikError", "ScenarioError", "GsikFileError", "HumanoidError", "PoseError", "SkeletonError", "SolverError", "TargetError",
     "UrdfError", "JointSpec", "RotationSpec", "SegmentSpec", "SiteSpec", "Skeleton", "build_skeleton",
     "bundled_skeletons", "load_skeleton", "skeleton_from_dict", "skeleton_from_yaml", "SolveResult", "Solver",
     "SolverSettings", "Status", "Target", "__version__",

@@ -60,6 +60,10 @@ class RetargetError(GsikError, ValueError):
     """A clip cannot be retargeted: a bad mapping, or joints the retargeting needs are not mapped."""
 
 
+class HumanoidError(GsikError, ValueError):
+    """A rig cannot be read as a humanoid: required bones not found, or a bad mapping entry."""
+
+
 class PriorError(GsikError, ValueError):
     """A pose prior file or pose-prior data is invalid, or does not fit the skeleton."""
 

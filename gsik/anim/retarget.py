@@ -37,8 +37,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from gsik.anim.motion import Motion
-from gsik.anim.retarget_map import resolve_mapping
-from gsik.errors import RetargetError, choices
+from gsik.anim.pelvis_frame import check_rotations, pelvis_frames, rig_lean, up_reference
+from gsik.anim.retarget_map import resolve_mapping, skeleton_bones
+from gsik.errors import RetargetError
+from gsik.humanoid import Rig, rig_from_clip
 from gsik.io.bvh import BvhClip, bvh_forward_kinematics
 from gsik.io.bvh_skeleton import Z_UP_TO_Y_UP, detect_up
 from gsik.kinematics import world_frames
@@ -118,14 +120,6 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
 
 
-def pelvis_frames(left_hip: np.ndarray, right_hip: np.ndarray, neck: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) pelvis orientations from (n, 3) points: x left hip to right hip, z towards the neck, y forward."""
-    x = _unit(right_hip - left_hip)
-    z = neck - 0.5 * (left_hip + right_hip)
-    z = _unit(z - np.sum(z * x, axis=-1, keepdims=True) * x)
-    return np.stack([x, np.cross(z, x), z], axis=-1)
-
-
 def best_rotations(rest: np.ndarray, now: np.ndarray) -> np.ndarray:
     """Rotations (n, 3, 3) best turning directions ``rest`` (m, 3) onto ``now`` (n, m, 3) (Kabsch, no reflection)."""
     if rest.shape[0] == 1:  # one direction: the shortest turn
@@ -141,20 +135,6 @@ def best_rotations(rest: np.ndarray, now: np.ndarray) -> np.ndarray:
     D = np.broadcast_to(np.eye(3), H.shape).copy()
     D[:, 2, 2] = d
     return np.transpose(Vt, (0, 2, 1)) @ D @ np.transpose(U, (0, 2, 1))
-
-
-def rig_lean(left_hip: np.ndarray, right_hip: np.ndarray, spine: np.ndarray, neck: np.ndarray) -> np.ndarray:
-    """The rig's constant turn (3, 3) from the pelvis frame through its first spine joint to the true pelvis.
-
-    The first spine joint is rigid with the hips in most rigs, but not straight
-    above them; the turn is the mean, over the clip's frames (points (n, 3)),
-    from that frame to the one through the neck: the waist is straight on
-    average. (A rig's rest pose cannot tell: many are not standing.)
-    """
-    lean = np.transpose(pelvis_frames(left_hip, right_hip, spine), (0, 2, 1)) @ pelvis_frames(left_hip, right_hip,
-                                                                                             neck)
-    U, _, Vt = np.linalg.svd(lean.mean(axis=0))
-    return U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
 
 
 def _layout(skeleton: Skeleton, mapping: Mapping[str, str], anchor: Mapping[str, str | None], rest) -> tuple:
@@ -178,15 +158,12 @@ def _targetable(skeleton: Skeleton) -> list[str]:
     return sorted((f for f in skeleton.target_names if f in PRIORITIES or f == "pelvis"), key=skeleton.frame_of)
 
 
-def _required_mapping(names: list[str], targetable: list[str], mapping: Mapping[str, str] | None) -> dict[str, str]:
-    """``{skeleton frame: clip joint}`` by the heuristics and ``mapping``; :class:`RetargetError` if a
-    :data:`REQUIRED` frame is left without a clip joint."""
-    found = resolve_mapping(names, targetable, mapping)
-    missing = [f for f in REQUIRED if f not in found]
-    if missing:
-        raise RetargetError(f"cannot retarget: no clip joint maps to {choices(missing)} (clip joints: "
-                            f"{choices(names)}); name them in a mapping file")
-    return found
+def _required_mapping(rig: Rig, skeleton: Skeleton, targetable: list[str],
+                      mapping: Mapping[str, str] | None) -> dict[str, str]:
+    """``{skeleton frame: clip joint}`` from the humanoid recognition of both and ``mapping``, in ``targetable``'s
+    order; :class:`RetargetError` if a required bone is missing in the clip."""
+    found = resolve_mapping(rig, skeleton_bones(skeleton), mapping)
+    return {f: found[f] for f in targetable if f in found}
 
 
 def _unmapped(targetable: list[str], names: list[str], mapping: dict[str, str]) -> tuple[tuple[str, ...], ...]:
@@ -223,10 +200,10 @@ class Retargeter:
     """
 
     def __init__(self, skeleton: Skeleton, clip: BvhClip, mapping: Mapping[str, str] | None = None,
-                 up: str | None = None):
+                 up: str | None = None, *, name: str = "clip"):
         names = [j.name for j in clip.joints]
         targetable = _targetable(skeleton)
-        found = _required_mapping(names, targetable, mapping)
+        found = _required_mapping(rig_from_clip(clip), skeleton, targetable, mapping)
         self.skeleton = skeleton
         self.up = detect_up(clip) if up is None else up
         index = {n: k for k, n in enumerate(names)}
@@ -236,11 +213,20 @@ class Retargeter:
         self._anchor = _anchors(skeleton, [f for f in targetable if f in found])
         self.mapping = _with_direction(found, self._anchor, rest_clip[[index[j] for j in found.values()]], self.scale)
         self._columns = np.array([index[j] for j in self.mapping.values()])
-        self._spine = "waist" if "waist" in self.mapping else "neck"
+        self.name = name
+        self._spine = self._up_point(clip, index)
         self._upright = self._lean(clip, index)
         self._local, self._pelvis_from_mid, self._groups, self._offset = _layout(skeleton, self.mapping,
                                                                                  self._anchor, rest)
         self.unmapped_frames, self.unmapped_clip = _unmapped(targetable, names, self.mapping)
+
+    def _up_point(self, clip: BvhClip, index: dict[str, int]) -> str:
+        """The mapped frame the pelvis's up axis points to: the waist, or the neck where the clip's waist sits on
+        the line through its hips (a degenerate frame); :class:`RetargetError` if neither is off that line."""
+        at = clip_world_positions(clip, self.up)
+        points = {f: at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip", "waist", "neck")
+                  if f in self.mapping}
+        return up_reference(points, {f: self.mapping[f] for f in points}, self.name)
 
     def _lean(self, clip: BvhClip, index: dict[str, int]) -> np.ndarray:
         """The rotation (3, 3) that takes out the rig's constant lean, averaged over ``clip``."""
@@ -252,6 +238,8 @@ class Retargeter:
         p = clip_world_positions(clip, self.up)[:, self._columns] * self.scale
         col = {f: k for k, f in enumerate(self.mapping)}
         R = pelvis_frames(p[:, col["left_hip"]], p[:, col["right_hip"]], p[:, col[self._spine]]) @ self._upright
+        check_rotations(R, f"{self.name}: the pelvis frame from {self.mapping['left_hip']!r}, "
+                           f"{self.mapping['right_hip']!r} and {self.mapping[self._spine]!r}")
         W = np.broadcast_to(np.eye(4), (len(p), 4, 4)).copy()
         W[:, :3, :3] = R
         W[:, :3, 3] = 0.5 * (p[:, col["left_hip"]] + p[:, col["right_hip"]]) + R @ self._pelvis_from_mid

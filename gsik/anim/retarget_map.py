@@ -1,99 +1,109 @@
-"""Which clip joint drives which biped frame: name heuristics for common rigs, or a mapping file.
+"""Which clip joint drives which skeleton frame: the humanoid recognition of both rigs, or a mapping file.
 
-Names are compared normalised (:func:`normalise`): namespace dropped
-(``mixamorig:LeftArm`` -> ``LeftArm``), lower case, without ``_ - . `` and
-spaces. A side is a ``left``/``l`` or ``right``/``r`` before or after the part
-(``LeftUpLeg``, ``l_thigh``, ``Thigh_R``). The first alias present in the clip
-wins, so ``Spine`` beats ``Spine1`` for the waist.
+Both rigs are read by :mod:`gsik.humanoid` (names of every common convention,
+the tree's structure where names fail); a canonical bone joins a clip joint
+to a skeleton frame. The bundled biped's frames are fixed
+(:data:`gsik.humanoid.bones.BIPED_FRAMES`: its ``left_shoulder`` is the arm).
+Beyond the canonical bones, the head's top (``headTop``) joins the clip's
+head End Site (or ``HeadTop_End``) to the skeleton's ``head_top``.
 
-A mapping file (YAML) names clip joints for biped frames where the heuristics
-miss; it overrides them one entry at a time::
+A mapping file (YAML) names clip joints where the recognition misses; it
+overrides it one entry at a time. Keys are canonical bones (VRM names) or,
+as in files written for the biped before, the skeleton's frame names::
 
     format: 1
-    map:                    # biped frame: clip joint (as written in the file)
-      left_hip: Bip01_L_Thigh
+    map:                    # canonical bone (or skeleton frame): clip joint (as written in the file)
+      leftUpperLeg: Bip01_L_Thigh
       left_knee: Bip01_L_Calf
 """
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from gsik.errors import RetargetError, choices
+from gsik.errors import HumanoidError, RetargetError, choices
+from gsik.humanoid import HUMANOID_BONES, Rig, recognise, rig_from_skeleton
+from gsik.humanoid.bones import BIPED_FRAMES
+from gsik.humanoid.names import label
 from gsik.io.files import read_text
 from gsik.io.yaml_safe import load_yaml
 
-#: Aliases (normalised) of the biped's frames without a side.
-CENTRE_ALIASES = {
-    "pelvis": ("hips", "hip", "pelvis", "root"),
-    "waist": ("spine", "spine0", "abdomen", "lowerback", "spine1", "chest"),
-    "neck": ("neck", "neck1", "lowerneck", "upperneck"),
-    "atlas": ("head",),
-    "head_top": ("headend", "headtop", "headtopend", "headsite", "head1"),
-}
-#: Aliases (normalised, without the side) of the biped's frames on each side.
-SIDE_ALIASES = {
-    "hip": ("upleg", "thigh", "upperleg", "femur", "hip"),
-    "knee": ("leg", "shin", "knee", "calf", "lowerleg", "tibia", "shank"),
-    "ankle": ("ankle", "foot"),
-    "toe": ("toebase", "toe", "toes", "ball", "footend"),
-    "shoulder": ("arm", "upperarm", "humerus"),
-    "elbow": ("forearm", "elbow", "lowerarm", "radius"),
-    "hand": ("hand", "wrist"),
-}
-SIDES = {"left": ("left", "l"), "right": ("right", "r")}
-
-
-def normalise(name: str) -> str:
-    """``name`` without its namespace, in lower case, without ``_ - .`` and spaces."""
-    return re.sub(r"[\s_\-.]", "", name.rsplit(":", 1)[-1]).lower()
-
-
-def _aliases() -> dict[str, tuple[str, ...]]:
-    """Every biped frame and its aliases, normalised, in order of preference."""
-    out = dict(CENTRE_ALIASES)
-    for side, prefixes in SIDES.items():
-        for part, names in SIDE_ALIASES.items():
-            out[f"{side}_{part}"] = tuple(a for n in names for p in prefixes for a in (p + n, n + p))
-    return out
-
-
-def guess_mapping(clip_names: Sequence[str], frame_names: Sequence[str]) -> dict[str, str]:
-    """Biped frame -> clip joint, for every frame in ``frame_names`` a clip name matches by alias."""
-    by_norm: dict[str, str] = {}
-    for name in clip_names:
-        by_norm.setdefault(normalise(name), name)
-    out = {}
-    for frame, aliases in _aliases().items():
-        if frame not in frame_names:
-            continue
-        hit = next((by_norm[a] for a in aliases if a in by_norm), None)
-        if hit is not None and hit not in out.values():
-            out[frame] = hit
-    return out
+#: The head's top: not a VRM bone, but a second point that carries the head's orientation.
+HEAD_TOP = "headTop"
+#: What retargeting cannot do without: the legs place and scale the pelvis, the neck turns it.
+REQUIRED_BONES = ("leftUpperLeg", "leftLowerLeg", "leftFoot", "rightUpperLeg", "rightLowerLeg", "rightFoot", "neck")
 
 
 def read_mapping(path: str | Path) -> dict[str, str]:
-    """A mapping file's ``map`` (biped frame -> clip joint); see the module docstring."""
+    """A mapping file's ``map`` (canonical bone or skeleton frame -> clip joint); see the module docstring."""
     # The one bounded reader every other format uses: size, depth and alias expansion limited, lines named.
     data = load_yaml(read_text(path, "mapping file"), str(path), RetargetError).data
     if not isinstance(data, dict) or not isinstance(data.get("map"), dict):
-        raise RetargetError(f"{path}: a mapping file needs a 'map:' of biped frame: clip joint, got {data!r:.80}")
+        raise RetargetError(f"{path}: a mapping file needs a 'map:' of bone (or skeleton frame): clip joint, "
+                            f"got {data!r:.80}")
     return {str(k): str(v) for k, v in data["map"].items()}
 
 
-def resolve_mapping(clip_names: Sequence[str], frame_names: Sequence[str],
-                    overrides: Mapping[str, str] | None = None) -> dict[str, str]:
-    """The heuristic mapping with ``overrides`` applied (checked against both name lists)."""
-    mapping = guess_mapping(clip_names, frame_names)
-    for frame, joint in (overrides or {}).items():
-        if frame not in frame_names:
-            raise RetargetError(f"mapping names biped frame {frame!r}, which does not exist; "
-                                f"valid: {choices(frame_names)}")
-        if joint not in clip_names:
-            raise RetargetError(f"mapping names clip joint {joint!r} for {frame!r}, which is not in the clip; "
-                                f"valid: {choices(clip_names)}")
-        mapping[frame] = joint
-    return mapping
+def _head_top(rig: Rig, head: str | None) -> str | None:
+    """The joint above ``head`` that marks its top: a ``HeadTop_End`` or the head's End Site."""
+    if head is None:
+        return None
+    j = rig.names.index(head)
+    return next((rig.names[c] for c in rig.children[j] if label(rig.names[c]).kind == "headTop"), None)
+
+
+def skeleton_bones(skeleton) -> dict[str, str]:
+    """Canonical bone (and :data:`HEAD_TOP`) -> the skeleton's frame: the biped's fixed table, else recognised."""
+    targets = set(skeleton.target_names)
+    if set(BIPED_FRAMES.values()) <= targets:
+        out = dict(BIPED_FRAMES)
+    else:
+        try:
+            out = dict(recognise(rig_from_skeleton(skeleton), required=REQUIRED_BONES).bones)
+        except HumanoidError as e:
+            raise RetargetError(f"skeleton {skeleton.name!r} is no humanoid gsik can retarget onto: {e}") from None
+    top = "head_top" if "head_top" in targets else _head_top(rig_from_skeleton(skeleton), out.get("head"))
+    if top is not None:
+        out[HEAD_TOP] = top
+    return {b: f for b, f in out.items() if f in targets}
+
+
+def _canonical(overrides: Mapping[str, str], frames: Mapping[str, str]) -> dict[str, str]:
+    """``overrides`` keyed by canonical bone (a skeleton frame name translated through ``frames``)."""
+    by_frame = {f: b for b, f in frames.items()}
+    valid = list(HUMANOID_BONES) + [HEAD_TOP] + list(by_frame)
+    out = {}
+    for key, joint in overrides.items():
+        if key not in valid:
+            raise RetargetError(f"mapping names bone or frame {key!r}, which does not exist; valid: {choices(valid)}")
+        out[by_frame.get(key, key)] = joint
+    return out
+
+
+def resolve_mapping(rig: Rig, frames: Mapping[str, str], overrides: Mapping[str, str] | None = None,
+                    clip: str = "clip") -> dict[str, str]:
+    """Skeleton frame -> clip joint: the clip ``rig`` recognised (with ``overrides``, canonical bones or skeleton
+    frames -> clip joints), joined to the skeleton through ``frames`` (canonical bone -> frame).
+
+    Raises:
+        RetargetError: an override names an unknown bone/frame or a joint not in the clip, or the clip lacks
+            a bone of :data:`REQUIRED_BONES` (the message names them and the clip's joints).
+    """
+    wanted = _canonical(overrides or {}, frames)
+    for bone, joint in wanted.items():
+        if joint not in rig.names:
+            raise RetargetError(f"mapping names clip joint {joint!r} for {bone!r}, which is not in the {clip}; "
+                                f"valid: {choices(rig.names)}")
+    top = wanted.pop(HEAD_TOP, None)
+    try:
+        bones = dict(recognise(rig, wanted, required=REQUIRED_BONES).bones)
+    except HumanoidError as e:
+        raise RetargetError(f"cannot retarget {clip}: {e}") from None
+    top = top or _head_top(rig, bones.get("head"))
+    if top is not None:
+        bones[HEAD_TOP] = top
+    return {frames[b]: j for b, j in bones.items() if b in frames}
+
+
+__all__ = ["read_mapping", "resolve_mapping", "skeleton_bones", "REQUIRED_BONES", "HEAD_TOP"]

@@ -12,6 +12,7 @@ import gsik
 from gsik.cli.commands import cmd_bench, cmd_scenarios, cmd_solve, cmd_walk
 from gsik.cli.track import cmd_track
 from gsik.cli.common import PROG
+from gsik.cli.humanoid import add_command as add_humanoid_command
 from gsik.cli.info import cmd_info
 from gsik.cli.gltf import add_command as add_gltf_command
 from gsik.cli.prior import add_commands as add_prior_commands
@@ -174,6 +175,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_track)
 
     add_prior_commands(add, _add_common)
+    add_humanoid_command(add)
     add_gltf_command(add)
 
     p = add("bench", "the solver benchmarks (paper Table 1, tracking, stability, reach)",

@@ -70,7 +70,8 @@ def _retarget(args: argparse.Namespace, frames: int | None = None) -> Retargeted
     if frames:
         clip = type(clip)(clip.joints, clip.frame_time, clip.motion[:frames])
     mapping = read_mapping(args.map) if args.map else None
-    rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up)
+    rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up,
+                    name=args.clip)
     with progress_for(args, "retarget") as bar:
         return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
 

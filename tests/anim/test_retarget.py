@@ -10,46 +10,63 @@ import pytest
 from gsik import load_skeleton
 from gsik.anim.motion import Motion
 from gsik.anim.retarget import Retargeter, best_rotations
-from gsik.anim.retarget_map import guess_mapping, normalise, read_mapping, resolve_mapping
+from gsik.anim.retarget_map import read_mapping, resolve_mapping, skeleton_bones
 from gsik.errors import RetargetError
+from gsik.humanoid import Rig
 from gsik.io.bvh import BvhClip, read_bvh
 from gsik.io.bvh_skeleton import motion_to_bvh
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-REAL_CLIP = Path(__file__).resolve().parents[3] / "shared" / "mocap" / "mocap_bvhtools_test.bvh"
+REAL_CLIP = next((p / "shared" / "mocap" / "mocap_bvhtools_test.bvh" for p in Path(__file__).resolve().parents[3:5]
+                  if (p / "shared" / "mocap").is_dir()), Path("../shared/mocap/mocap_bvhtools_test.bvh"))
 #: The biped's own names the heuristics do not know (its shoulders are not a rig's clavicles).
 BIPED_EXTRA = {"left_shoulder": "left_shoulder", "right_shoulder": "right_shoulder", "atlas": "atlas",
                "waist": "waist"}
 
 
-def test_names_match_without_namespace_case_or_separators():
-    assert normalise("mixamorig:Left_Up-Leg") == "leftupleg"
-    clip = ["mixamorig:Hips", "mixamorig:LeftUpLeg", "mixamorig:LeftLeg", "mixamorig:LeftShoulder",
-            "mixamorig:LeftArm", "Thigh_R", "r_calf", "mixamorig:Head"]
-    frames = load_skeleton("biped").target_names
-    got = guess_mapping(clip, frames)
-    assert got == {"pelvis": "mixamorig:Hips", "left_hip": "mixamorig:LeftUpLeg", "left_knee": "mixamorig:LeftLeg",
-                   "left_shoulder": "mixamorig:LeftArm", "right_hip": "Thigh_R", "right_knee": "r_calf",
-                   "atlas": "mixamorig:Head"}  # the clavicle (LeftShoulder) drives nothing
+def _chain_rig(names: list[str]) -> Rig:
+    """A rig whose joints hang one below the other (each 10 units down), names as given."""
+    return Rig(tuple(names), tuple(range(-1, len(names) - 1)), [[0.0, -10.0 * k, 0.0] for k in range(len(names))])
+
+
+def _legs_and_neck(left: tuple[str, str, str], right: tuple[str, str, str]) -> Rig:
+    """Hips, a spine-neck-head chain and two legs named as given."""
+    names = ["Hips", "Spine", "Neck", "Head", *left, *right]
+    parents = [-1, 0, 1, 2, 0, 4, 5, 0, 7, 8]
+    rest = [[0, 0, 0], [0, 10, 0], [0, 50, 0], [0, 60, 0], [10, 0, 0], [10, -45, 0], [10, -90, 0],
+            [-10, 0, 0], [-10, -45, 0], [-10, -90, 0]]
+    return Rig(tuple(names), tuple(parents), rest)
+
+
+def test_clip_joints_map_to_biped_frames_through_the_humanoid_recognition():
+    rig = _legs_and_neck(("mixamorig:LeftUpLeg", "mixamorig:LeftLeg", "mixamorig:LeftFoot"),
+                         ("Thigh_R", "r_calf", "foot_r"))
+    got = resolve_mapping(rig, skeleton_bones(load_skeleton("biped")))
+    assert got == {"pelvis": "Hips", "waist": "Spine", "neck": "Neck", "atlas": "Head",
+                   "left_hip": "mixamorig:LeftUpLeg", "left_knee": "mixamorig:LeftLeg",
+                   "left_ankle": "mixamorig:LeftFoot",
+                   "right_hip": "Thigh_R", "right_knee": "r_calf", "right_ankle": "foot_r"}
 
 
 def test_a_mapping_file_overrides_the_heuristics_and_bad_names_are_refused(tmp_path):
     path = tmp_path / "map.yaml"
-    path.write_text("format: 1\nmap:\n  left_knee: Shin_Left\n")
-    frames = load_skeleton("biped").target_names
-    assert resolve_mapping(["LeftLeg", "Shin_Left"], frames, read_mapping(path))["left_knee"] == "Shin_Left"
+    rig = _legs_and_neck(("LeftUpLeg", "Genou", "LeftFoot"), ("RightUpLeg", "RightLeg", "RightFoot"))
+    frames = skeleton_bones(load_skeleton("biped"))
+    for key in ("left_knee", "leftLowerLeg"):  # an old file's biped frame, or the canonical bone
+        path.write_text(f"format: 1\nmap:\n  {key}: Genou\n")
+        assert resolve_mapping(rig, frames, read_mapping(path))["left_knee"] == "Genou"
     with pytest.raises(RetargetError, match="'left_kne'.*valid: .*'left_knee'"):
-        resolve_mapping(["LeftLeg"], frames, {"left_kne": "LeftLeg"})
-    with pytest.raises(RetargetError, match="'Knee'.*not in the clip.*'LeftLeg'"):
-        resolve_mapping(["LeftLeg"], frames, {"left_knee": "Knee"})
-    path.write_text("left_knee: Shin_Left\n")
+        resolve_mapping(rig, frames, {"left_kne": "LeftLeg"})
+    with pytest.raises(RetargetError, match="'Knee'.*not in the clip.*'Genou'"):
+        resolve_mapping(rig, frames, {"left_knee": "Knee"})
+    path.write_text("left_knee: Genou\n")
     with pytest.raises(RetargetError, match="needs a 'map:'"):
         read_mapping(path)
 
 
 def test_a_rig_without_the_legs_the_retargeting_needs_is_refused_with_their_names():
     clip = read_bvh(DATA / "mixamo_zyx_crlf.bvh")
-    with pytest.raises(RetargetError, match="'right_hip', 'right_knee', 'right_ankle'.*mapping file"):
+    with pytest.raises(RetargetError, match="'rightUpperLeg', 'rightLowerLeg', 'rightFoot'.*mapping file"):
         Retargeter(load_skeleton("biped"), clip)
 
 
