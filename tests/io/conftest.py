@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-import humanoid_standin
 import pytest
 from gltf_characters import Spec, make_character
-
-humanoid_standin.install()  # until the humanoid branch's gsik.humanoid is merged; then a no-op
 
 
 @pytest.fixture(scope="session")
