@@ -23,7 +23,8 @@ from gsik.io.gltf.character import Character
 from gsik.io.gltf.load import gltf_library
 from gsik.io.gltf.pose import NodeTracks, node_tracks
 
-#: A joint whose rotation stays within this of its rest over the motion gets no channel [quaternion units].
+#: A joint whose rotation stays within this of its rest over the motion gets no channel (quaternion distance,
+#: about half the angle [rad]).
 STILL = 1e-7
 _FLOAT, _ARRAY_BUFFER = 5126, 34962
 
@@ -124,7 +125,8 @@ def _add_animation(document, blob: BlobBuilder, tracks: NodeTracks, character: C
     for k, node in enumerate(tracks.nodes):
         r = tracks.rotation[:, k]
         rest_r = np.asarray(rest[node].rotation)
-        if np.abs(np.abs(r @ rest_r) - 1.0).max() > STILL:
+        off_rest = np.minimum(np.linalg.norm(r - rest_r, axis=1), np.linalg.norm(r + rest_r, axis=1))
+        if off_rest.max() > STILL:
             channel(node, "rotation", r, "VEC4")
         if rest[node].parent not in joints:
             channel(node, "translation", tracks.translation[:, k], "VEC3")
