@@ -7,7 +7,7 @@ import shutil
 
 import numpy as np
 import pytest
-from gltf_characters import LAYOUT, NAMINGS, Spec, blender_read
+from blender.gltf_characters import LAYOUT, NAMINGS, Spec, blender_read
 
 import gsik
 from gsik.io.gltf import read_character, read_gltf, write_gltf

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from gltf_characters import NAMINGS, Spec, blender_read
+from blender.gltf_characters import NAMINGS, Spec, blender_read
 from gltf_validator import assert_valid
 
 import gsik

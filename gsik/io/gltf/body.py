@@ -36,10 +36,33 @@ def _joint_of_frames(sk: Skeleton) -> np.ndarray:
 
 
 def character_from_skeleton(sk: Skeleton) -> Character:
-    """``sk`` with its mannequin body as a skinned glTF character (see the module)."""
+    """``sk`` with its mannequin body as a skinned glTF character (see the module); a skeleton without segments
+    gets the skin alone."""
     pygltflib = gltf_library()
     frames = sk.frame_transforms(sk.rest)
     world = gltf_from_gsik(frames[sk.joint_frame])  # (n_joints, 4, 4) file axes, the bind pose
+    nodes, gltf_nodes = _joint_nodes(sk, world)
+    n = len(nodes)
+    document = pygltflib.GLTF2(asset=pygltflib.Asset(generator="gsik", version="2.0"), scene=0,
+                               scenes=[pygltflib.Scene(name=sk.name, nodes=[0])], nodes=gltf_nodes)
+    blob = BlobBuilder(document, ())
+    inverse_bind = np.linalg.inv(world)
+    document.skins = [pygltflib.Skin(name=sk.name, joints=list(range(n)), inverseBindMatrices=blob.add(
+        inverse_bind.transpose(0, 2, 1).reshape(n, 16), "MAT4"))]
+    meshes = _add_body(sk, frames, blob, nodes)
+    blob.finish()
+    file = GltfFile("<memory>", tuple(nodes), (GltfSkin(sk.name, tuple(range(n)), frozen_array(inverse_bind)),),
+                    meshes, document, (bytes(blob.blob),))
+    rest_world = np.concatenate([world, np.tile(np.eye(4), (len(nodes) - n, 1, 1))])
+    rest_world.flags.writeable = False
+    effectors = MappingProxyType({e: e for e in sk.effector_sites})
+    return Character(file, sk, 0, tuple(range(n)), None, effectors, MappingProxyType({}), rest_world,
+                     np.array(sk.rest))
+
+
+def _joint_nodes(sk: Skeleton, world: np.ndarray) -> tuple[list[GltfNode], list]:
+    """One node per joint at its bind transform ``world`` (n_joints, 4, 4): as plain data and as glTF JSON."""
+    pygltflib = gltf_library()
     parents = [int(p) for p in sk.joint_parent]
     nodes, gltf_nodes = [], []
     for j, name in enumerate(sk.joint_names):
@@ -49,35 +72,30 @@ def character_from_skeleton(sk: Skeleton) -> Character:
         nodes.append(GltfNode(name, parents[j], frozen_array(t), frozen_array(r), frozen_array(np.ones(3))))
         gltf_nodes.append(pygltflib.Node(name=name, translation=t.tolist(), rotation=r.tolist(),
                                          children=children or None))
-    n = len(nodes)
-    document = pygltflib.GLTF2(asset=pygltflib.Asset(generator="gsik", version="2.0"), scene=0,
-                               scenes=[pygltflib.Scene(name=sk.name, nodes=[0, n])], nodes=gltf_nodes)
-    blob = BlobBuilder(document, ())
-    inverse_bind = np.linalg.inv(world)
-    skin = pygltflib.Skin(name=sk.name, joints=list(range(n)),
-                          inverseBindMatrices=blob.add(inverse_bind.transpose(0, 2, 1).reshape(n, 16), "MAT4"))
-    primitive = _body_primitive(sk, frames, blob)
-    document.skins = [skin]
-    document.materials = [pygltflib.Material(name="mannequin", pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
-        baseColorFactor=[*BODY_COLOR, 1.0], metallicFactor=0.0, roughnessFactor=0.8))]
-    document.meshes = [pygltflib.Mesh(name=f"{sk.name}_body", primitives=[primitive[0]])]
-    document.nodes.append(pygltflib.Node(name=f"{sk.name}_body", mesh=0, skin=0))
-    nodes.append(GltfNode(f"{sk.name}_body", -1, frozen_array(np.zeros(3)), frozen_array([0.0, 0.0, 0.0, 1.0]),
-                          frozen_array(np.ones(3)), 0, 0))
-    blob.finish()
-    file = GltfFile("<memory>", tuple(nodes), (GltfSkin(sk.name, tuple(range(n)), frozen_array(inverse_bind)),),
-                    (GltfMesh(f"{sk.name}_body", (primitive[1],)),), document, (bytes(blob.blob),))
-    rest_world = np.concatenate([world, np.eye(4)[None]])
-    rest_world.flags.writeable = False
-    effectors = MappingProxyType({e: e for e in sk.effector_sites})
-    return Character(file, sk, 0, tuple(range(n)), None, effectors, MappingProxyType({}), rest_world,
-                     np.array(sk.rest))
+    return nodes, gltf_nodes
 
 
-def _body_primitive(sk: Skeleton, frames: np.ndarray, blob: BlobBuilder) -> tuple[object, GltfPrimitive]:
-    """The mannequin as a glTF primitive (accessors added to ``blob``) and as plain data."""
+def _add_body(sk: Skeleton, frames: np.ndarray, blob: BlobBuilder, nodes: list[GltfNode]) -> tuple[GltfMesh, ...]:
+    """The mannequin's mesh, material and mesh node added to ``blob``'s document (none for no segments)."""
     pygltflib = gltf_library()
     body = mannequin_mesh(sk)
+    if not len(body.points):
+        return ()
+    document = blob.document
+    primitive, data = _body_primitive(sk, body, frames, blob)
+    document.materials = [pygltflib.Material(name="mannequin", pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
+        baseColorFactor=[*BODY_COLOR, 1.0], metallicFactor=0.0, roughnessFactor=0.8))]
+    document.meshes = [pygltflib.Mesh(name=f"{sk.name}_body", primitives=[primitive])]
+    document.nodes.append(pygltflib.Node(name=f"{sk.name}_body", mesh=0, skin=0))
+    document.scenes[0].nodes.append(len(document.nodes) - 1)
+    nodes.append(GltfNode(f"{sk.name}_body", -1, frozen_array(np.zeros(3)), frozen_array([0.0, 0.0, 0.0, 1.0]),
+                          frozen_array(np.ones(3)), 0, 0))
+    return (GltfMesh(f"{sk.name}_body", (data,)),)
+
+
+def _body_primitive(sk: Skeleton, body, frames: np.ndarray, blob: BlobBuilder) -> tuple[object, GltfPrimitive]:
+    """The mannequin ``body`` as a glTF primitive (accessors added to ``blob``) and as plain data."""
+    pygltflib = gltf_library()
     file_frames = gltf_from_gsik(frames[body.carrier])  # (n_vertices, 4, 4)
     positions = np.einsum("vij,vj->vi", file_frames[:, :3, :3], body.points) + file_frames[:, :3, 3]
     normals = np.einsum("vij,vj->vi", file_frames[:, :3, :3], body.normals)

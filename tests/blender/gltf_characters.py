@@ -16,7 +16,7 @@ from typing import NamedTuple
 import pytest
 from blender import blender_python
 
-HARNESS = Path(__file__).resolve().parents[1] / "blender" / "blender_gltf.py"
+HARNESS = Path(__file__).with_name("blender_gltf.py")
 MARKER = "GSIK_BLENDER_JSON "
 
 #: The layout: canonical bone -> (parent, head, tail) in Blender's world (z up, facing -y, metres), left side +x.
@@ -42,47 +42,37 @@ for side, sx in (("left", 1.0), ("right", -1.0)):
         f"{S}Toes": (f"{S}Foot", (0.10 * sx, -0.13, 0.03), (0.10 * sx, -0.20, 0.03)),
     })
 
-_SIDES = {"left": ("Left", "l", "L"), "right": ("Right", "r", "R")}
+_LIMBS = ("Shoulder", "UpperArm", "LowerArm", "Hand", "UpperLeg", "LowerLeg", "Foot", "Toes")
+_TORSO = ("hips", "spine", "chest", "upperChest", "neck", "head")
 
 
-def _mixamo(bone: str) -> str:
-    torso = {"hips": "Hips", "spine": "Spine", "chest": "Spine1", "upperChest": "Spine2", "neck": "Neck",
-             "head": "Head"}
-    limb = {"Shoulder": "Shoulder", "UpperArm": "Arm", "LowerArm": "ForeArm", "Hand": "Hand", "UpperLeg": "UpLeg",
-            "LowerLeg": "Leg", "Foot": "Foot", "Toes": "ToeBase"}
-    if bone in torso:
-        return "mixamorig:" + torso[bone]
-    side = "left" if bone.startswith("left") else "right"
-    return f"mixamorig:{_SIDES[side][0]}{limb[bone[len(side):]]}"
+def _naming(torso: str, limbs: str, limb_name: str, sides: tuple[str, str]):
+    """A canonical bone -> name function: ``torso``/``limbs`` are space-separated names in the orders of
+    :data:`_TORSO`/:data:`_LIMBS`; ``limb_name`` formats a limb from ``{limb}`` and ``{side}`` (one of ``sides``)."""
+    torso_of, limb_of = dict(zip(_TORSO, torso.split())), dict(zip(_LIMBS, limbs.split()))
 
+    def name(bone: str) -> str:
+        if bone in torso_of:
+            return torso_of[bone]
+        side = "left" if bone.startswith("left") else "right"
+        return limb_name.format(limb=limb_of[bone[len(side):]], side=sides[side == "right"])
 
-def _unreal(bone: str) -> str:
-    torso = {"hips": "pelvis", "spine": "spine_01", "chest": "spine_02", "upperChest": "spine_03", "neck": "neck_01",
-             "head": "head"}
-    limb = {"Shoulder": "clavicle", "UpperArm": "upperarm", "LowerArm": "lowerarm", "Hand": "hand",
-            "UpperLeg": "thigh", "LowerLeg": "calf", "Foot": "foot", "Toes": "ball"}
-    if bone in torso:
-        return torso[bone]
-    side = "left" if bone.startswith("left") else "right"
-    return f"{limb[bone[len(side):]]}_{_SIDES[side][1]}"
+    return name
 
 
 def _vrm(bone: str) -> str:
     return bone[0].upper() + bone[1:]
 
 
-def _rigify(bone: str) -> str:
-    torso = {"hips": "DEF-spine", "spine": "DEF-spine.001", "chest": "DEF-spine.002", "upperChest": "DEF-spine.003",
-             "neck": "DEF-spine.004", "head": "DEF-spine.006"}
-    limb = {"Shoulder": "shoulder", "UpperArm": "upper_arm", "LowerArm": "forearm", "Hand": "hand",
-            "UpperLeg": "thigh", "LowerLeg": "shin", "Foot": "foot", "Toes": "toe"}
-    if bone in torso:
-        return torso[bone]
-    side = "left" if bone.startswith("left") else "right"
-    return f"DEF-{limb[bone[len(side):]]}.{_SIDES[side][2]}"
-
-
-NAMINGS = {"mixamo": _mixamo, "unreal": _unreal, "vrm": _vrm, "rigify": _rigify}
+NAMINGS = {
+    "mixamo": _naming("mixamorig:Hips mixamorig:Spine mixamorig:Spine1 mixamorig:Spine2 mixamorig:Neck mixamorig:Head",
+                      "Shoulder Arm ForeArm Hand UpLeg Leg Foot ToeBase", "mixamorig:{side}{limb}", ("Left", "Right")),
+    "unreal": _naming("pelvis spine_01 spine_02 spine_03 neck_01 head",
+                      "clavicle upperarm lowerarm hand thigh calf foot ball", "{limb}_{side}", ("l", "r")),
+    "vrm": _vrm,
+    "rigify": _naming("DEF-spine DEF-spine.001 DEF-spine.002 DEF-spine.003 DEF-spine.004 DEF-spine.006",
+                      "shoulder upper_arm forearm hand thigh shin foot toe", "DEF-{limb}.{side}", ("L", "R")),
+}
 
 
 class Spec(NamedTuple):
