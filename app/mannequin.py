@@ -70,7 +70,34 @@ def _solid_actor(pd: pv.PolyData) -> vtkActor:
     return actor
 
 
-class Mannequin:
+class SolidBody:
+    """Meshes (each with a ``polydata`` and an ``update(P, R)``) drawn by one actor each, added to a plotter once.
+
+    The mannequin and a character's skinned body (:mod:`gsik_studio.skinned_body`) are both one, so the body view
+    draws either the same way.
+    """
+
+    def __init__(self, plotter: pv.Plotter, meshes: tuple) -> None:
+        self.meshes = meshes
+        self.actors = [_solid_actor(m.polydata) for m in self.meshes]
+        for a in self.actors:
+            plotter.add_actor(a, reset_camera=False, pickable=False)
+
+    def update(self, P: np.ndarray, R: np.ndarray) -> None:
+        """Move the body to world positions P (n_frames, 3) [m] and rotations R (n_frames, 3, 3)."""
+        for m in self.meshes:
+            m.update(P, R)
+
+    def set_visible(self, visible: bool) -> None:
+        for a in self.actors:
+            a.SetVisibility(bool(visible))
+
+    @property
+    def visible(self) -> bool:
+        return bool(self.actors[0].GetVisibility())
+
+
+class Mannequin(SolidBody):
     """The body: capsules and boxes added to a plotter once; :meth:`update` moves them in place.
 
     Args:
@@ -87,28 +114,12 @@ class Mannequin:
         def colors(group):
             return rgb8([LEFT_COLOR if s.left else BODY_COLOR for s in group]).reshape(-1, 3)
 
-        self.meshes = (
+        super().__init__(plotter, (
             BodyMesh([s.carrier for s in caps], [capsule_local(s, template) for s in caps], template[2],
                      colors(caps)),
             BodyMesh([s.carrier for s in boxes], [box_local(s) for s in boxes], box_faces(1), colors(boxes)),
-        )
-        self.actors = [_solid_actor(m.polydata) for m in self.meshes]
-        for a in self.actors:
-            plotter.add_actor(a, reset_camera=False, pickable=False)
+        ))
 
     @property
     def n_solids(self) -> int:
         return sum(len(m.carriers) for m in self.meshes)
-
-    def update(self, P: np.ndarray, R: np.ndarray) -> None:
-        """Move the body to world positions P (n_frames, 3) [m] and rotations R (n_frames, 3, 3)."""
-        for m in self.meshes:
-            m.update(P, R)
-
-    def set_visible(self, visible: bool) -> None:
-        for a in self.actors:
-            a.SetVisibility(bool(visible))
-
-    @property
-    def visible(self) -> bool:
-        return bool(self.actors[0].GetVisibility())

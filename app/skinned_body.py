@@ -12,7 +12,7 @@ import pyvista as pv
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from gsik.skinning import SkinBinding, skin_into
-from gsik_studio.mannequin import _solid_actor
+from gsik_studio.mannequin import SolidBody
 from gsik_studio.scene import rgb8, touch
 
 
@@ -44,27 +44,12 @@ class SkinnedMesh:
         self.polydata.GetPointData().GetArray("Normals").Modified()
 
 
-class SkinnedBody:
+class SkinnedBody(SolidBody):
     """A character's body drawn in ``plotter``: its skinned mesh and actor, moved by :meth:`update`."""
 
     def __init__(self, plotter: pv.Plotter, binding: SkinBinding) -> None:
-        self.meshes = (SkinnedMesh(binding),)
-        self.actors = [_solid_actor(m.polydata) for m in self.meshes]
-        for a in self.actors:
-            plotter.add_actor(a, reset_camera=False, pickable=False)
+        super().__init__(plotter, (SkinnedMesh(binding),))
 
     @property
     def n_vertices(self) -> int:
         return sum(m.binding.n_vertices for m in self.meshes)
-
-    def update(self, P: np.ndarray, R: np.ndarray) -> None:
-        for m in self.meshes:
-            m.update(P, R)
-
-    def set_visible(self, visible: bool) -> None:
-        for a in self.actors:
-            a.SetVisibility(bool(visible))
-
-    @property
-    def visible(self) -> bool:
-        return bool(self.actors[0].GetVisibility())
