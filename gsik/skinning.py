@@ -42,8 +42,11 @@ class SkinBinding:
     colors: np.ndarray
 
     def __post_init__(self) -> None:
+        kinds = {"slots": np.int64, "slot_frames": np.int64, "triangles": np.int64}
         for name in self.__dataclass_fields__:
-            getattr(self, name).flags.writeable = False
+            value = np.ascontiguousarray(getattr(self, name), dtype=kinds.get(name, np.float64))
+            value.flags.writeable = False
+            object.__setattr__(self, name, value)
 
     @property
     def n_vertices(self) -> int:
@@ -62,16 +65,14 @@ def skin_into(binding: SkinBinding, world_from_frames: np.ndarray, points: np.nd
     Args:
         binding: The mesh's binding.
         world_from_frames: (n_frames, 4, 4) the skeleton's world transforms [m] at the pose.
-        points: (n_vertices, 3) written in place [m].
-        normals: (n_vertices, 3) written in place, or ``None`` to skip them.
+        points: (n_vertices, 3) float64, written in place [m].
+        normals: (n_vertices, 3) float64, written in place, or ``None`` to skip them.
     """
-    M = slot_matrices(binding, world_from_frames)  # (n_slots, 3, 4)
-    blended = np.einsum("vk,vkij->vij", binding.weights, M[binding.slots])  # (n_vertices, 3, 4)
-    np.einsum("vij,vj->vi", blended[:, :, :3], binding.positions, out=points)
-    points += blended[:, :, 3]
-    if normals is not None:
-        np.einsum("vij,vj->vi", blended[:, :, :3], binding.normals, out=normals)
-        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    from gsik.kernels.skinning import blend_skin
+
+    M = np.ascontiguousarray(slot_matrices(binding, world_from_frames))  # (n_slots, 3, 4)
+    out_normals = normals if normals is not None else np.empty_like(points)
+    blend_skin(M, binding.slots, binding.weights, binding.positions, binding.normals, points, out_normals)
 
 
 def skinned(binding: SkinBinding, world_from_frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
