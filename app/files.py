@@ -8,7 +8,7 @@ from collections.abc import Callable
 from PySide6 import QtCore, QtWidgets
 
 import gsik
-from gsik_studio.model import Document, transfer
+from gsik_studio.model import Document, characters, transfer
 
 POSE_FILTER = "gsik poses (*.yaml *.yml);;All files (*)"
 BVH_FILTER = "BVH motion (*.bvh);;All files (*)"
@@ -164,11 +164,11 @@ class FileActions:
         return self.import_skeleton_path(path, new_window, confirm=False) if path else False
 
     def import_skeleton_path(self, path: str, new_window: bool = False, confirm: bool = True) -> object:
-        """A new document on the skeleton of a YAML or URDF file, shown in this window instead of the current one
+        """A new document on the skeleton of a YAML or URDF file or a glTF character, shown in this window instead of the current one
         (asking first about unsaved changes unless ``confirm`` is False; True) or with ``new_window`` in a window
         of its own (returned). False, saying why, on a bad file or a "Cancel"."""
         try:
-            skeleton = transfer.read_skeleton(path)
+            skeleton = characters.read_skeleton(path)
             doc = transfer.document_for(skeleton)
         except gsik.GsikError as exc:
             return self._failed(f"Could not import {os.path.basename(path)}: {exc}", "Could not import skeleton",
@@ -205,11 +205,9 @@ class FileActions:
 
     def export_gltf_path(self, path: str) -> bool:
         """Write the clip, else the key sequence, else the pose as glTF; False, saying why, on error."""
-        from gsik_studio.model.characters import export_gltf
-
         self._stop_playback()
         try:
-            what = export_gltf(self.doc, path)
+            what = characters.export_gltf(self.doc, path)
         except gsik.GsikError as exc:
             return self._failed(f"Could not export: {exc}", "Could not export glTF",
                                 f"Nothing was written (any existing file is unchanged).\n\n{exc}")

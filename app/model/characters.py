@@ -41,6 +41,18 @@ def character_of(skeleton: gsik.Skeleton) -> Character | None:
     return _characters.get(skeleton)
 
 
+def read_skeleton(path: str | os.PathLike) -> gsik.Skeleton:
+    """A character's skeleton (remembered, see :func:`open_character`) for a ``.glb``/``.gltf`` path, else
+    :func:`gsik_studio.model.transfer.read_skeleton`'s (YAML, URDF).
+
+    Raises:
+        GsikError: the file cannot be read or is not a valid skeleton or character.
+    """
+    from gsik_studio.model.transfer import read_skeleton as read_other
+
+    return open_character(path).skeleton if is_character_file(path) else read_other(path)
+
+
 def character_document(path: str | os.PathLike) -> Document:
     """A new document on the character of ``path``, standing at the file's rest pose."""
     return Document(open_character(path).skeleton)

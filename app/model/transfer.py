@@ -54,18 +54,13 @@ def motion_on(skeleton: gsik.Skeleton, motion: Motion) -> Motion | None:
 
 
 def read_skeleton(path: str | os.PathLike) -> gsik.Skeleton:
-    """A skeleton from a YAML file, a URDF file (by its ending, :data:`URDF_SUFFIXES`) or a skinned glTF character
-    (``.glb``/``.gltf``, remembered by :mod:`gsik_studio.model.characters` for its body and its export).
+    """A skeleton from a YAML file or a URDF file (by its ending, :data:`URDF_SUFFIXES`).
 
     Raises:
         GsikError: the file cannot be read or is not a valid skeleton.
     """
     if os.fspath(path).lower().endswith(URDF_SUFFIXES):
         return skeleton_from_urdf(path)
-    from gsik_studio.model.characters import is_character_file, open_character
-
-    if is_character_file(path):
-        return open_character(path).skeleton
     return gsik.load_skeleton(path)
 
 

@@ -123,6 +123,14 @@ def test_a_data_uri_bomb_is_refused_before_decoding(biped_gltf, tmp_path):
         read_gltf(_write(tmp_path, doc))
 
 
+def test_json_past_the_limit_is_refused_before_parsing(tmp_path, monkeypatch):
+    monkeypatch.setattr("gsik.io.gltf.load.MAX_JSON_BYTES", 1000)
+    path = tmp_path / "big.gltf"
+    path.write_text(json.dumps({"asset": {"version": "2.0"}, "nodes": [{"name": "x" * 2000}]}), encoding="utf-8")
+    with pytest.raises(GltfError, match="bytes of JSON; gsik reads at most 1,000"):
+        read_gltf(path)
+
+
 def test_a_cycle_in_the_nodes_is_refused(biped_gltf, tmp_path):
     doc = json.loads(json.dumps(biped_gltf))
     doc["nodes"][0]["children"] = doc["nodes"][0].get("children", []) + [3]  # node 3 is a grandchild of node 0 ...

@@ -22,6 +22,8 @@ from gsik.io.files import read_bytes
 MAX_FILE_BYTES = 512 * 1024 * 1024
 #: Largest buffer (declared or actual) [bytes]; all buffers together are bounded by the same figure.
 MAX_BUFFER_BYTES = 512 * 1024 * 1024
+#: Largest JSON part (a .gltf file, or a GLB's JSON chunk) [bytes]: parsing it is the slow step.
+MAX_JSON_BYTES = 64 * 1024 * 1024
 #: Most entries of any top-level array (nodes, meshes, accessors ...).
 MAX_ITEMS = 100_000
 
@@ -82,9 +84,11 @@ def _parse(data: bytes, where: str) -> tuple[object, bytes | None]:
             warnings.simplefilter("ignore")
             if data[:4] == _GLB_MAGIC:
                 _check_glb_header(data, where)
+                _check_json_size(struct.unpack_from("<I", data, 12)[0], where)
                 document = pygltflib.GLTF2.load_from_bytes(data)
                 blob = document.binary_blob() if document is not None else None
             else:
+                _check_json_size(len(data), where)
                 document, blob = pygltflib.GLTF2.from_json(data.decode("utf-8"), infer_missing=True), None
     except GltfError:
         raise
@@ -93,6 +97,11 @@ def _parse(data: bytes, where: str) -> tuple[object, bytes | None]:
     if document is None or not isinstance(getattr(document, "nodes", None), list):
         raise GltfError(f"{where}: not a glTF file (no JSON chunk)")
     return document, blob
+
+
+def _check_json_size(size: int, where: str) -> None:
+    if size > MAX_JSON_BYTES:
+        raise GltfError(f"{where}: {size:,} bytes of JSON; gsik reads at most {MAX_JSON_BYTES:,}")
 
 
 def _check_glb_header(data: bytes, where: str) -> None:
