@@ -32,15 +32,16 @@ reported; so is every mapped frame's error per clip frame.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
 from gsik.anim.motion import Motion
 from gsik.anim.pelvis_frame import check_rotations, pelvis_frames, rig_lean, up_reference
-from gsik.anim.retarget_map import resolve_mapping, skeleton_bones
+from gsik.anim.retarget_map import HEAD_TOP, resolve_mapping, skeleton_bones
 from gsik.errors import RetargetError
-from gsik.humanoid import Rig, rig_from_clip
+from gsik.humanoid import rig_from_clip
 from gsik.io.bvh import BvhClip, bvh_forward_kinematics
 from gsik.io.bvh_skeleton import Z_UP_TO_Y_UP, detect_up
 from gsik.kinematics import world_frames
@@ -55,7 +56,15 @@ PRIORITIES = {
     "left_toe": 1, "right_toe": 1, "head_top": 1, "neck": 1,
     "left_shoulder": 2, "right_shoulder": 2, "waist": 2, "left_hip": 2, "right_hip": 2,
 }
-#: Frames the retargeting cannot do without: the pelvis's placement and the leg length need them.
+#: Priority level of each canonical bone's position target (the same levels on any skeleton).
+BONE_PRIORITIES = {
+    **dict.fromkeys(("leftFoot", "rightFoot", "leftHand", "rightHand", "head"), 0),
+    **dict.fromkeys(("leftLowerLeg", "rightLowerLeg", "leftLowerArm", "rightLowerArm", "leftToes", "rightToes",
+                     HEAD_TOP, "neck"), 1),
+    **dict.fromkeys(("leftUpperArm", "rightUpperArm", "leftShoulder", "rightShoulder", "spine", "chest",
+                     "upperChest", "leftUpperLeg", "rightUpperLeg"), 2),
+}
+#: The biped's frames the retargeting cannot do without: the pelvis's placement and the leg length need them.
 REQUIRED = ("left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle", "neck")
 #: Prioritised steps per frame at most (warm-started: a few suffice at 30 fps).
 STEPS_PER_FRAME = 6
@@ -111,9 +120,9 @@ def _rest_positions(clip: BvhClip) -> np.ndarray:
 
 
 def _leg_length(points: Callable[[str], np.ndarray]) -> float:
-    """Mean of both legs' hip-knee-ankle lengths, from a name -> position lookup."""
-    return 0.5 * sum(np.linalg.norm(points(f"{s}_hip") - points(f"{s}_knee"))
-                     + np.linalg.norm(points(f"{s}_knee") - points(f"{s}_ankle")) for s in ("left", "right"))
+    """Mean of both legs' hip-knee-ankle lengths, from a canonical bone -> position lookup."""
+    return 0.5 * sum(np.linalg.norm(points(f"{s}UpperLeg") - points(f"{s}LowerLeg"))
+                     + np.linalg.norm(points(f"{s}LowerLeg") - points(f"{s}Foot")) for s in ("left", "right"))
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -137,33 +146,44 @@ def best_rotations(rest: np.ndarray, now: np.ndarray) -> np.ndarray:
     return np.transpose(Vt, (0, 2, 1)) @ D @ np.transpose(U, (0, 2, 1))
 
 
-def _layout(skeleton: Skeleton, mapping: Mapping[str, str], anchor: Mapping[str, str | None], rest) -> tuple:
-    """From the skeleton's rest frames ``rest`` (R, p): each mapped frame's position in the pelvis's frame,
-    the pelvis origin from the hip joints' midpoint (pelvis frame), the frames grouped by anchor (tree
-    order), and each anchored frame's rest offset from its anchor (world) [m]."""
+class _Layout(NamedTuple):
+    """The skeleton's rest layout about its pelvis frame (x left hip to right hip, z towards the neck).
+
+    Attributes:
+        local: mapped frame -> its rest position in the pelvis frame, from the root [m].
+        root_from_mid: the root's offset from the hips' midpoint, in the pelvis frame [m].
+        root_turn: (3, 3) the root frame's rest rotation in the pelvis frame.
+        groups: anchor frame -> the mapped frames hanging off it (tree order).
+        offset: anchored frame -> its rest offset from its anchor (world) [m].
+    """
+
+    local: dict
+    root_from_mid: np.ndarray
+    root_turn: np.ndarray
+    groups: dict
+    offset: dict
+
+
+def _layout(skeleton: Skeleton, frames: Mapping[str, str], mapping: Mapping[str, str],
+            anchor: Mapping[str, str | None], rest) -> _Layout:
+    """The :class:`_Layout` of ``skeleton`` from its rest frames ``rest`` (R, p); ``frames``: bone -> frame."""
     R, p = rest
-    pelvis = skeleton.frame_of("pelvis")
-    mid = 0.5 * (p[skeleton.frame_of("left_hip")] + p[skeleton.frame_of("right_hip")])
-    local = {f: R[pelvis].T @ (p[skeleton.frame_of(f)] - p[pelvis]) for f in mapping}
+    at = {b: p[skeleton.frame_of(f)] for b, f in frames.items()}
+    pelvis = pelvis_frames(at["leftUpperLeg"][None], at["rightUpperLeg"][None], at["neck"][None])[0]
+    root = skeleton.frame_of(frames["hips"])
+    mid = 0.5 * (at["leftUpperLeg"] + at["rightUpperLeg"])
+    local = {f: pelvis.T @ (p[skeleton.frame_of(f)] - p[root]) for f in mapping}
     groups: dict[str, list[str]] = {}
     for f in mapping:
         if anchor[f] is not None:
             groups.setdefault(anchor[f], []).append(f)
     offset = {f: p[skeleton.frame_of(f)] - p[skeleton.frame_of(a)] for a, fs in groups.items() for f in fs}
-    return local, R[pelvis].T @ (p[pelvis] - mid), groups, offset
+    return _Layout(local, pelvis.T @ (p[root] - mid), pelvis.T @ R[root], groups, offset)
 
 
-def _targetable(skeleton: Skeleton) -> list[str]:
-    """The frames retargeting can aim, in tree order (an anchor before what hangs off it)."""
-    return sorted((f for f in skeleton.target_names if f in PRIORITIES or f == "pelvis"), key=skeleton.frame_of)
-
-
-def _required_mapping(rig: Rig, skeleton: Skeleton, targetable: list[str],
-                      mapping: Mapping[str, str] | None) -> dict[str, str]:
-    """``{skeleton frame: clip joint}`` from the humanoid recognition of both and ``mapping``, in ``targetable``'s
-    order; :class:`RetargetError` if a required bone is missing in the clip."""
-    found = resolve_mapping(rig, skeleton_bones(skeleton), mapping)
-    return {f: found[f] for f in targetable if f in found}
+def _targetable(skeleton: Skeleton, frames: Mapping[str, str]) -> list[str]:
+    """The frames retargeting can aim (the recognised bones'), in tree order (an anchor before what hangs off it)."""
+    return sorted(set(frames.values()) & set(skeleton.target_names), key=skeleton.frame_of)
 
 
 def _unmapped(targetable: list[str], names: list[str], mapping: dict[str, str]) -> tuple[tuple[str, ...], ...]:
@@ -172,9 +192,12 @@ def _unmapped(targetable: list[str], names: list[str], mapping: dict[str, str]) 
     return tuple(f for f in targetable if f not in mapping), tuple(n for n in names if n not in used)
 
 
-def _scale(skeleton: Skeleton, rest_positions: np.ndarray, clip_rest: dict[str, np.ndarray]) -> float:
-    """Skeleton leg length over the clip's (``rest_positions`` (n_frames, 3) [m]; ``clip_rest``: frame -> position)."""
-    return float(_leg_length(lambda f: rest_positions[skeleton.frame_of(f)]) / _leg_length(lambda f: clip_rest[f]))
+def _scale(skeleton: Skeleton, frames: Mapping[str, str], rest_positions: np.ndarray,
+           clip_rest: dict[str, np.ndarray]) -> float:
+    """Skeleton leg length over the clip's (``rest_positions`` (n_frames, 3) [m]; ``clip_rest``: frame -> position;
+    ``frames``: canonical bone -> skeleton frame)."""
+    return float(_leg_length(lambda b: rest_positions[skeleton.frame_of(frames[b])])
+                 / _leg_length(lambda b: clip_rest[frames[b]]))
 
 
 def _with_direction(found: dict[str, str], anchor: dict, rest_points: np.ndarray, scale: float) -> dict[str, str]:
@@ -185,71 +208,95 @@ def _with_direction(found: dict[str, str], anchor: dict, rest_points: np.ndarray
             if anchor[f] is None or np.linalg.norm(at[f] - at[anchor[f]]) > 1e-6 / scale}
 
 
+def widened(skeleton: Skeleton, margin: float) -> Skeleton:
+    """``skeleton`` with the ranges of its ball joints (two or more DOFs) widened by ``margin`` each side [rad];
+    hinges (knees, elbows) keep theirs, so a straight limb never bends the wrong way."""
+    ball = np.zeros(skeleton.n_dofs, dtype=bool)
+    for dofs in skeleton.joint_dofs:
+        if len(dofs) >= 2:
+            ball[list(dofs)] = True
+    return replace(skeleton, lower=skeleton.lower - margin * ball, upper=skeleton.upper + margin * ball)
+
+
 class Retargeter:
     """Retargets clips of one rig onto one skeleton (reuse it for every clip of that rig).
 
     Args:
-        skeleton: The target skeleton (the biped): a ``pelvis`` site and the :data:`REQUIRED` frames.
+        skeleton: The target skeleton: the biped, or any humanoid gsik skeleton (recognised by
+            :mod:`gsik.humanoid`: hips, legs and neck at least); its rest pose (A, T or other) does not matter.
         clip: A clip of the source rig; its hierarchy and rest pose fix the mapping and the scale.
-        mapping: Skeleton frame -> clip joint entries overriding the name heuristics
+        mapping: Canonical bone (or skeleton frame) -> clip joint entries overriding the recognition
             (:mod:`gsik.anim.retarget_map`).
         up: The clip's up axis, ``"y"`` or ``"z"``; default detected over the clip.
+        name: The clip's name in messages.
+        limit_margin: How far beyond the skeleton's ball joints' limits the retargeted pose may go, each side
+            [rad] (:func:`widened`): real motion (a kneel, a climb) exceeds the biped's authoring ranges.
+            0 keeps them.
 
     Raises:
-        RetargetError: a bad mapping entry, or a :data:`REQUIRED` frame left unmapped.
+        RetargetError: a bad mapping entry, a required bone missing in the clip or the skeleton, or a pelvis
+            frame the clip leaves undefined.
     """
 
     def __init__(self, skeleton: Skeleton, clip: BvhClip, mapping: Mapping[str, str] | None = None,
-                 up: str | None = None, *, name: str = "clip"):
+                 up: str | None = None, *, name: str = "clip", limit_margin: float = 0.0):
         names = [j.name for j in clip.joints]
-        targetable = _targetable(skeleton)
-        found = _required_mapping(rig_from_clip(clip), skeleton, targetable, mapping)
-        self.skeleton = skeleton
+        if limit_margin:
+            skeleton = widened(skeleton, limit_margin)
+        frames = skeleton_bones(skeleton)
+        targetable = _targetable(skeleton, frames)
+        found = resolve_mapping(rig_from_clip(clip), frames, mapping, clip=name)
+        found = {f: found[f] for f in targetable if f in found}
+        self.skeleton, self.name, self._frames = skeleton, name, frames
+        self._bone = {f: b for b, f in frames.items()}
+        self._root = frames["hips"]
         self.up = detect_up(clip) if up is None else up
         index = {n: k for k, n in enumerate(names)}
         rest_clip = _rest_positions(clip)
         rest = world_frames(skeleton, skeleton.rest, np.eye(4), skeleton.root)
-        self.scale = _scale(skeleton, rest[1], {f: rest_clip[index[j]] for f, j in found.items()})
-        self._anchor = _anchors(skeleton, [f for f in targetable if f in found])
+        self.scale = _scale(skeleton, frames, rest[1], {f: rest_clip[index[j]] for f, j in found.items()})
+        self._anchor = _anchors(skeleton, [f for f in targetable if f in found], self._root)
         self.mapping = _with_direction(found, self._anchor, rest_clip[[index[j] for j in found.values()]], self.scale)
         self._columns = np.array([index[j] for j in self.mapping.values()])
-        self.name = name
         self._spine = self._up_point(clip, index)
         self._upright = self._lean(clip, index)
-        self._local, self._pelvis_from_mid, self._groups, self._offset = _layout(skeleton, self.mapping,
-                                                                                 self._anchor, rest)
+        self._layout = _layout(skeleton, frames, self.mapping, self._anchor, rest)
         self.unmapped_frames, self.unmapped_clip = _unmapped(targetable, names, self.mapping)
 
     def _up_point(self, clip: BvhClip, index: dict[str, int]) -> str:
         """The mapped frame the pelvis's up axis points to: the waist, or the neck where the clip's waist sits on
         the line through its hips (a degenerate frame); :class:`RetargetError` if neither is off that line."""
         at = clip_world_positions(clip, self.up)
-        points = {f: at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip", "waist", "neck")
-                  if f in self.mapping}
-        return up_reference(points, {f: self.mapping[f] for f in points}, self.name)
+        roles = {"left_hip": "leftUpperLeg", "right_hip": "rightUpperLeg", "waist": "spine", "neck": "neck"}
+        joints = {r: self.mapping[self._frames[b]] for r, b in roles.items() if self._frames.get(b) in self.mapping}
+        points = {r: at[:, index[j]] for r, j in joints.items()}
+        return self._frames[roles[up_reference(points, joints, self.name)]]
 
     def _lean(self, clip: BvhClip, index: dict[str, int]) -> np.ndarray:
         """The rotation (3, 3) that takes out the rig's constant lean, averaged over ``clip``."""
         at = clip_world_positions(clip, self.up)
-        return rig_lean(*(at[:, index[self.mapping[f]]] for f in ("left_hip", "right_hip", self._spine, "neck")))
+        frames = (self._frames["leftUpperLeg"], self._frames["rightUpperLeg"], self._spine, self._frames["neck"])
+        return rig_lean(*(at[:, index[self.mapping[f]]] for f in frames))
 
     def world_targets(self, clip: BvhClip) -> tuple[np.ndarray, np.ndarray]:
         """Per frame: the pelvis's world transform (n, 4, 4) and the mapped frames' targets (n, n_mapped, 3) [m]."""
         p = clip_world_positions(clip, self.up)[:, self._columns] * self.scale
         col = {f: k for k, f in enumerate(self.mapping)}
-        R = pelvis_frames(p[:, col["left_hip"]], p[:, col["right_hip"]], p[:, col[self._spine]]) @ self._upright
-        check_rotations(R, f"{self.name}: the pelvis frame from {self.mapping['left_hip']!r}, "
-                           f"{self.mapping['right_hip']!r} and {self.mapping[self._spine]!r}")
+        left, right = (self._frames[b] for b in ("leftUpperLeg", "rightUpperLeg"))
+        R = pelvis_frames(p[:, col[left]], p[:, col[right]], p[:, col[self._spine]]) @ self._upright
+        check_rotations(R, f"{self.name}: the pelvis frame from {self.mapping[left]!r}, "
+                           f"{self.mapping[right]!r} and {self.mapping[self._spine]!r}")
+        lay = self._layout
         W = np.broadcast_to(np.eye(4), (len(p), 4, 4)).copy()
-        W[:, :3, :3] = R
-        W[:, :3, 3] = 0.5 * (p[:, col["left_hip"]] + p[:, col["right_hip"]]) + R @ self._pelvis_from_mid
+        W[:, :3, :3] = R @ lay.root_turn
+        W[:, :3, 3] = 0.5 * (p[:, col[left]] + p[:, col[right]]) + R @ lay.root_from_mid
         out = np.empty_like(p)
         for f, k in col.items():
             if self._anchor[f] is None:  # rigid with the pelvis: where the pelvis puts it
-                out[:, k] = W[:, :3, 3] + R @ self._local[f]
-        for anchor, group in self._groups.items():  # anchors in tree order: each one's target is known
+                out[:, k] = W[:, :3, 3] + R @ lay.local[f]
+        for anchor, group in lay.groups.items():  # anchors in tree order: each one's target is known
             ks = [col[f] for f in group]
-            offsets = np.array([self._offset[f] for f in group])
+            offsets = np.array([lay.offset[f] for f in group])
             turn = best_rotations(offsets, p[:, ks] - p[:, [col[anchor]]])
             out[:, ks] = out[:, [col[anchor]]] + np.einsum("nij,mj->nmi", turn, offsets)
         return W, out
@@ -257,14 +304,15 @@ class Retargeter:
     def solver(self) -> Solver:
         """A solver rooted at the pelvis, with the rest pose as a light posture below every target."""
         s = Solver(self.skeleton, restarts=0)
-        s.set_root("pelvis")
+        s.set_root(self._root)
         s.set_posture(None, REST_POSTURE_WEIGHT)
         return s
 
     def retarget(self, clip: BvhClip, progress: Callable[[int], None] | None = None) -> Retargeted:
         """Solve every frame of ``clip``, each warm-started from the previous one's pose."""
         W, points = self.world_targets(clip)
-        tracked = [(k, f) for k, f in enumerate(self.mapping) if f != "pelvis"]
+        tracked = [(k, f, BONE_PRIORITIES.get(self._bone[f], 2)) for k, f in enumerate(self.mapping)
+                   if f != self._root]
         frames = [self.skeleton.frame_of(f) for f in self.mapping]
         s = self.solver()
         n = clip.n_frames
@@ -272,7 +320,7 @@ class Retargeter:
         err = np.zeros((n, len(frames)))
         for i in range(n):
             s.set_world_from_root(W[i])
-            s.set_targets({f: Target(points[i, k], position_only=True, priority=PRIORITIES[f]) for k, f in tracked})
+            s.set_targets({f: Target(points[i, k], position_only=True, priority=level) for k, f, level in tracked})
             for _ in range(STEPS_PER_FRAME if i else FIRST_FRAME_STEPS):
                 if s.step().step_norm < 1e-5:
                     break
@@ -280,17 +328,17 @@ class Retargeter:
             err[i] = np.linalg.norm(s.world_positions()[frames] - points[i], axis=1)
             if progress is not None:
                 progress(i)
-        motion = Motion(self.skeleton, Q, ("pelvis",) * n, W, clip.frame_time)
+        motion = Motion(self.skeleton, Q, (self._root,) * n, W, clip.frame_time)
         return Retargeted(motion, dict(self.mapping), self.unmapped_frames, self.unmapped_clip, err,
                           self.scale, self.up)
 
 
-def _anchors(skeleton: Skeleton, frames: list[str]) -> dict[str, str | None]:
-    """Each frame's nearest ancestor among ``frames``, or ``None`` when no angle moves it relative to the pelvis."""
+def _anchors(skeleton: Skeleton, frames: list[str], root: str) -> dict[str, str | None]:
+    """Each frame's nearest ancestor among ``frames``, or ``None`` when no angle moves it relative to ``root``."""
     mapped = {skeleton.frame_of(f): f for f in frames}
     # Rigid with the pelvis: at the same place, pelvis at the origin, in the rest pose and in another pose.
-    a = world_frames(skeleton, skeleton.rest, np.eye(4), "pelvis")[1]
-    b = world_frames(skeleton, 0.5 * (skeleton.lower + skeleton.upper) + 0.1, np.eye(4), "pelvis")[1]
+    a = world_frames(skeleton, skeleton.rest, np.eye(4), root)[1]
+    b = world_frames(skeleton, 0.5 * (skeleton.lower + skeleton.upper) + 0.1, np.eye(4), root)[1]
     out = {}
     for f in frames:
         i = skeleton.frame_of(f)

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import math
 from typing import TextIO
 
-import gsik
 from gsik.anim.retarget import Retargeted, Retargeter
 from gsik.anim.retarget_map import read_mapping
-from gsik.cli.common import check_out
+from gsik.cli.common import check_out, load_any_skeleton
 from gsik.cli.progress import progress_for
 from gsik.io.bvh import read_bvh
 from gsik.io.bvh_skeleton import write_motion_bvh
@@ -18,12 +18,19 @@ from gsik.prior_mixture import fit_mixture, write_mixture
 
 def add_commands(add, common) -> None:
     """Register both commands; ``add(name, help, description)`` makes a sub-parser, ``common`` adds --progress."""
-    p = add("retarget", "retarget a BVH clip onto the biped; report every mapped joint's error",
-            "Map the clip's joints to the biped's by name (common rigs; namespaces such as 'mixamorig:' "
-            "ignored; --map for others), scale by leg length, and solve each frame with the biped's joints "
-            "tracking the clip's by priority (ankles, wrists, head; then knees, elbows, toes, neck; then "
-            "shoulders), warm-started. Prints each mapped joint's error and what could not be mapped.")
+    p = add("retarget", "retarget a BVH clip onto the biped (or --onto any humanoid); report every joint's error",
+            "Recognise the clip's humanoid bones (gsik.humanoid: names of the common rig conventions, the "
+            "tree's shape where names fail; --map for the rest) and the target's, scale by leg length, and solve "
+            "each frame with the target's joints tracking the clip's bone directions at the target's own "
+            "lengths, by priority (feet, hands, head; then knees, elbows, toes, neck; then shoulders, hips, "
+            "spine), warm-started. Prints each mapped joint's error and what could not be mapped.")
     _clip_options(p)
+    p.add_argument("--limit-margin", type=float, default=30.0, metavar="DEG",
+                   help="let the retargeted pose exceed the target's joint limits by this much each side "
+                        "(default 30: real motion exceeds the biped's authoring ranges; 0 keeps them)")
+    p.add_argument("--onto", metavar="SKELETON", default="biped",
+                   help="the humanoid to retarget onto: a bundled skeleton, a skeleton .yaml, a .urdf or a .bvh "
+                        "clip's skeleton (default biped)")
     p.add_argument("--out", metavar="BIPED.bvh", help="write the biped's motion as BVH")
     p.add_argument("--units", choices=("cm", "m"), default="cm", help="BVH length unit (default cm)")
     p.add_argument("--up", choices=("z", "y"), help="BVH up axis (default: the clip's)")
@@ -70,18 +77,19 @@ def _retarget(args: argparse.Namespace, frames: int | None = None) -> Retargeted
     if frames:
         clip = type(clip)(clip.joints, clip.frame_time, clip.motion[:frames])
     mapping = read_mapping(args.map) if args.map else None
-    rt = Retargeter(gsik.load_skeleton("biped"), clip, mapping, None if args.file_up == "auto" else args.file_up,
-                    name=args.clip)
+    rt = Retargeter(load_any_skeleton(getattr(args, "onto", "biped")), clip, mapping, None if args.file_up == "auto" else args.file_up,
+                    name=args.clip, limit_margin=math.radians(getattr(args, "limit_margin", 0.0)))
     with progress_for(args, "retarget") as bar:
         return rt.retarget(clip, lambda i: bar(i + 1, clip.n_frames))
 
 
 def _report(r: Retargeted, out: TextIO) -> None:
     print(f"{r.motion.n_frames} frames, up {r.up}, scale {r.scale:.5g} m per file unit (leg length)", file=out)
-    print(f"{'biped frame':16} {'clip joint':20} {'mean':>8} {'p95':>8} {'max':>8}  [mm]", file=out)
+    name = r.motion.skeleton.name
+    print(f"{name + ' frame':16} {'clip joint':20} {'mean':>8} {'p95':>8} {'max':>8}  [mm]", file=out)
     for frame, joint, mean, p95, worst in r.error_table():
         print(f"{frame:16} {joint:20} {mean:8.2f} {p95:8.2f} {worst:8.2f}", file=out)
-    print(f"biped frames not mapped: {', '.join(r.unmapped_frames) or 'none'}", file=out)
+    print(f"{name} frames not mapped: {', '.join(r.unmapped_frames) or 'none'}", file=out)
     print(f"clip joints not used: {', '.join(r.unmapped_clip) or 'none'}", file=out)
 
 

@@ -1,7 +1,7 @@
 """What a joint's name says: its side and which part of a humanoid it is (one matcher for every convention).
 
 A name is cut into lower-case words: namespace (``mixamorig:``), rig prefix
-(``CC_Base_``, ``Bip01 ``, ``DEF-``, ``ORG-``, ``MCH-``) and separators
+(``CC_Base_``, ``Bip01 ``, ``DEF-``, ``ORG-``, ``MCH-``, HumanIK's ``Character1_``) and separators
 dropped, camel case split (``LeftUpLeg`` -> ``left up leg``, Daz's ``lShldr``
 -> ``l shldr``), digits dropped. A side is a word ``left``/``l`` or
 ``right``/``r`` anywhere (``L_Thigh``, ``thigh_l``, ``upper_arm.L``,
@@ -26,7 +26,8 @@ import re
 from typing import NamedTuple
 
 #: Rig prefixes dropped before reading a name (after its ``namespace:``).
-_PREFIX = re.compile(r"^(cc_base_|bip0*1(?=[ _]|$)[ _]?|def-|org-|mch-|mixamorig\d*[_:]?)", re.IGNORECASE)
+_PREFIX = re.compile(r"^(cc_base_|bip0*1(?=[ _]|$)[ _]?|def-|org-|mch-|mixamorig\d*[_:]?|character\d*_)",
+                     re.IGNORECASE)
 _WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+|\d+")
 
 #: Joined words -> part kind. ``shoulder`` and ``sidehip`` are settled by the chain; spine words all read ``spine``.

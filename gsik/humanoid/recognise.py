@@ -130,6 +130,7 @@ def recognise(rig: Rig, overrides: Mapping[str, str] | None = None, *,
             + f"; the rig's joints: {choices(rig.names)} (name them in a mapping file)")
     order = [b for b in HUMANOID_BONES if b in found]
     up, forward, height = rest_axes(rig, {b: found[b].joint for b in order})
+    up.flags.writeable = forward.flags.writeable = False
     return Recognition(
         bones={b: rig.names[found[b].joint] for b in order},
         confidence={b: found[b].confidence for b in order},

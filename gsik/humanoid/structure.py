@@ -89,7 +89,7 @@ def _hips_and_chest(shape: _Shape) -> tuple[int, tuple[int, int], int, tuple[int
         if legs is None or not legs[2]:
             continue
         for up in legs[2]:
-            for c in [up] + [d for d in range(up + 1, rig.n_joints) if rig.is_ancestor(up, d)]:
+            for c in rig.subtree(up):
                 arms = shape.pair(c, MIN_ARM * shape.extent)
                 if arms is not None and arms[2] and c not in (legs[0], legs[1]):
                     found = (h, legs[:2], c, arms[:2], arms[2])

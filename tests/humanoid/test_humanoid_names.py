@@ -62,6 +62,8 @@ def test_twist_share_and_roll_bones_are_not_the_joint_and_are_listed_as_ignored(
      ("upperLeg", "lowerLeg", "upperArm", "lowerArm", "collar")),
     (("LeftUpperLeg", "LeftLowerArm", "Left Hand", "L Foot", "foot.L", "L_Hand"), "left",
      ("upperLeg", "lowerArm", "hand", "foot", "foot", "hand")),
+    (("Character1_RightUpLeg", "Bip001 R Calf", "Bip01_R_Foot", "ik_hand_r_twist"), "right",
+     ("upperLeg", "lowerLeg", "foot", None)),
 ])
 def test_names_give_side_and_part_in_every_spelling(names, side, kind):
     assert [(label(n).side, label(n).kind) for n in names] == [(side, k) for k in kind]
