@@ -23,8 +23,8 @@ def add_command(add) -> None:
     """Register ``export-gltf`` with the parser's ``add(name, help, description)``."""
     p = add("export-gltf", "write a pose, its keys or clip, or a BVH clip as a glTF character (.glb/.gltf)",
             "Write a pose file's pose (or its keys or clip as an animation) or a BVH clip as glTF 2.0: on "
-            "--character (a skinned .glb/.gltf, everything else of it kept), else on the pose's or clip's own "
-            "skeleton with its mannequin body as a skinned mesh.")
+            "--character (a skinned .glb/.gltf, everything else of it kept; a clip of another rig is retargeted "
+            "onto it first), else on the pose's or clip's own skeleton with its mannequin body as a skinned mesh.")
     p.add_argument("input", metavar="POSE.yaml|CLIP.bvh", help="a pose file or a BVH clip")
     p.add_argument("--character", metavar="CHARACTER.glb", help="the character to pose (a skinned glTF file)")
     p.add_argument("--out", metavar="OUT.glb", required=True, help="the glTF file to write (.glb or .gltf)")
@@ -44,16 +44,19 @@ def cmd_export_gltf(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def _from_clip(args: argparse.Namespace) -> tuple[Character, Motion, str]:
-    imported = import_bvh(read_bvh(args.input))
+    """The clip on its own skeleton, on a character of the same rig, or retargeted onto a character of another."""
+    clip = read_bvh(args.input)
+    imported = import_bvh(clip)
     motion = imported.motion
     if args.character is None:
         return character_from_skeleton(imported.skeleton), motion, f"{motion.n_frames} frames"
     character = read_character(args.character)
-    missing = [d for d in character.skeleton.dof_names if d not in imported.skeleton.dof_names]
-    if missing:
-        raise CommandError(f"{args.input}: the clip's rig is not {args.character}'s (no {missing[0]!r} among its "
-                           "DOFs); retargeting a clip of another rig onto a character is not supported yet")
-    return character, motion, f"{motion.n_frames} frames"
+    if all(d in imported.skeleton.dof_names for d in character.skeleton.dof_names):
+        return character, motion, f"{motion.n_frames} frames"
+    from gsik.anim.retarget import Retargeter
+
+    done = Retargeter(character.skeleton, clip, name=Path(args.input).name).retarget(clip)
+    return character, done.motion, f"{done.motion.n_frames} frames retargeted"
 
 
 def _from_pose_file(args: argparse.Namespace) -> tuple[Character, Motion, str]:

@@ -80,3 +80,23 @@ def test_a_pose_of_a_gltf_character_exports_onto_that_character(tmp_path, blende
     got = blender_read(out)
     _assert_blender_on(got["pose_heads"], got["bones"], sk, _heads(sk, q, W, sk.root))
     assert max(abs(np.array(h) - r).max() for h, r in zip(got["pose_heads"], got["rest_heads"])) > 0.05
+
+
+def test_a_clip_of_another_rig_is_retargeted_onto_the_character(tmp_path, blender_character):
+    from gsik.anim.retarget import Retargeter
+
+    source = blender_character(Spec("unreal", "A", True))
+    out = tmp_path / "walk_on_unreal.glb"
+    assert main(["export-gltf", str(CLIP), "--character", str(source), "--out", str(out)]) == 0
+    assert_valid(out)
+    sk = read_character(source).skeleton
+    clip = read_bvh(CLIP)
+    motion = Retargeter(sk, clip, name=CLIP.name).retarget(clip).motion
+    frames = [0, motion.n_frames - 1]
+    got = blender_read(out, times=[f * motion.frame_time for f in frames])
+    heads = []
+    for f in frames:
+        P = _heads(sk, motion.q[f], motion.world_from_root[f], motion.roots[f])
+        _assert_blender_on(got["heads"][f * motion.frame_time], got["bones"], sk, P)
+        heads.append(np.array(got["heads"][f * motion.frame_time]))
+    assert np.abs(heads[1] - heads[0]).max() > 0.05  # the character walks
