@@ -65,6 +65,10 @@ ACTIONS: tuple[ActionSpec, ...] = (
                "A new window on a skeleton from a YAML or URDF file (this document stays open here)"),
     ActionSpec("export_bvh", "&Export BVH…", lambda w: w.files.export_bvh_dialog(), None,
                "Export the clip, the keyed sequence or the pose as BVH"),
+    ActionSpec("open_character", "Open c&haracter…", lambda w: w.files.open_character_dialog(), None,
+               "A new document in this window on a skinned glTF character (.glb, .gltf), its body drawn"),
+    ActionSpec("export_gltf", "Export &glTF…", lambda w: w.files.export_gltf_dialog(), None,
+               "Export the clip, the keyed sequence or the pose as glTF, on the character (or the mannequin)"),
     ActionSpec("screenshot", "Screens&hot…", lambda w: w.screenshot_dialog(), None, "Save a picture of the window",
                S.SP_DesktopIcon),
     ActionSpec("quit", "&Quit", lambda w: w.close(), K.Quit, "Quit gsik-studio"),
@@ -100,8 +104,9 @@ ACTIONS: tuple[ActionSpec, ...] = (
 
 #: Menus: (title, entries); an entry names an action or a submenu, None is a separator.
 MENUS = (
-    ("&File", ("new", "new_skeleton", "open", "recent", None, "save", "save_as", None, "import_clip", "import_skeleton",
-               "import_skeleton_window", "export_bvh", None, "screenshot", None, "quit")),
+    ("&File", ("new", "new_skeleton", "open", "recent", None, "save", "save_as", None, "open_character",
+               "import_clip", "import_skeleton", "import_skeleton_window", "export_bvh", "export_gltf", None,
+               "screenshot", None, "quit")),
     ("&Edit", ("undo", "redo")),
     ("&Pose", ("root_left", "root_right", None, "reset", "random", "mirror_lr", "mirror_rl", "walk", "scenarios")),
     ("&View", ("frame", "frame_selected", None, *(f"view_{n}" for n, _ in VIEW_KEYS), None, "trackball", "sticks")),

@@ -8,11 +8,13 @@ from collections.abc import Callable
 from PySide6 import QtCore, QtWidgets
 
 import gsik
-from gsik_studio.model import Document, transfer
+from gsik_studio.model import Document, characters, transfer
 
 POSE_FILTER = "gsik poses (*.yaml *.yml);;All files (*)"
 BVH_FILTER = "BVH motion (*.bvh);;All files (*)"
-SKELETON_FILTER = "Skeletons (*.yaml *.yml *.urdf *.xml);;All files (*)"
+SKELETON_FILTER = "Skeletons (*.yaml *.yml *.urdf *.xml *.glb *.gltf);;All files (*)"
+CHARACTER_FILTER = "glTF characters (*.glb *.gltf);;All files (*)"
+GLTF_FILTER = "glTF binary (*.glb);;glTF (*.gltf)"
 MAX_RECENT = 8
 
 
@@ -175,11 +177,11 @@ class FileActions:
         return self.import_skeleton_path(path, new_window, confirm=False) if path else False
 
     def import_skeleton_path(self, path: str, new_window: bool = False, confirm: bool = True) -> object:
-        """A new document on the skeleton of a YAML or URDF file, shown in this window instead of the current one
+        """A new document on the skeleton of a YAML or URDF file or a glTF character, shown in this window instead of the current one
         (asking first about unsaved changes unless ``confirm`` is False; True) or with ``new_window`` in a window
         of its own (returned). False, saying why, on a bad file or a "Cancel"."""
         try:
-            skeleton = transfer.read_skeleton(path)
+            skeleton = characters.read_skeleton(path)
             doc = transfer.document_for(skeleton)
         except gsik.GsikError as exc:
             return self._failed(f"Could not import {os.path.basename(path)}: {exc}", "Could not import skeleton",
@@ -199,6 +201,30 @@ class FileActions:
         self._stop_playback()
         self._show_document(doc)
         self._opened()
+        return True
+
+    def open_character_dialog(self) -> object:
+        """File → Open character: a new document in this window on a skinned glTF character."""
+        if not self.confirm_discard("open a character"):
+            return False
+        path = self._path("Open character", CHARACTER_FILTER)
+        return self.import_skeleton_path(path, confirm=False) if path else False
+
+    def export_gltf_dialog(self) -> bool:
+        path = self._path("Export glTF", GLTF_FILTER, "pose.glb")
+        if path and not os.path.splitext(path)[1]:
+            path += ".glb"
+        return self.export_gltf_path(path) if path else False
+
+    def export_gltf_path(self, path: str) -> bool:
+        """Write the clip, else the key sequence, else the pose as glTF; False, saying why, on error."""
+        self._stop_playback()
+        try:
+            what = characters.export_gltf(self.doc, path)
+        except gsik.GsikError as exc:
+            return self._failed(f"Could not export: {exc}", "Could not export glTF",
+                                f"Nothing was written (any existing file is unchanged).\n\n{exc}")
+        self._message(f"Exported the {what} to {path}", 6000)
         return True
 
     def export_bvh_dialog(self) -> bool:

@@ -10,7 +10,7 @@ import tempfile
 
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gsik-studio", description="Interactive IK pose authoring (gsik).")
-    p.add_argument("pose", nargs="?", help="a pose file (.yaml) to open")
+    p.add_argument("pose", nargs="?", help="a pose file (.yaml) or a skinned glTF character (.glb, .gltf) to open")
     p.add_argument("--screenshot", metavar="PNG", help="render the window once to this PNG and exit")
     p.add_argument("--size", metavar="WxH", help="window size (default: as last time, else 1440x900)")
     p.add_argument("--view", choices=("perspective", "front", "side", "top"),
@@ -45,10 +45,15 @@ def _screenshot(app, args, size: tuple[int, int]) -> int:
     from gsik_studio.model import Document, transfer
     from gsik_studio.window import MainWindow
 
+    from gsik_studio.model.characters import character_document, is_character_file
+
     doc = Document()
     if args.pose:
         try:
-            doc, warnings = transfer.open_pose(args.pose, doc)  # on the skeleton the file names
+            if is_character_file(args.pose):
+                doc, warnings = character_document(args.pose), []
+            else:
+                doc, warnings = transfer.open_pose(args.pose, doc)  # on the skeleton the file names
         except gsik.GsikError as exc:
             print(f"gsik-studio: {exc}", file=sys.stderr)
             return 1
@@ -97,7 +102,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.pose:
         from PySide6 import QtCore
 
-        QtCore.QTimer.singleShot(0, lambda: window.open_path(args.pose, confirm=False))
+        from gsik_studio.model.characters import is_character_file
+
+        if is_character_file(args.pose):  # a character: a new document on it, its body drawn
+            QtCore.QTimer.singleShot(0, lambda: window.files.import_skeleton_path(args.pose, confirm=False))
+        else:
+            QtCore.QTimer.singleShot(0, lambda: window.open_path(args.pose, confirm=False))
     return app.exec()
 
 

@@ -34,6 +34,11 @@ def compile_kernels() -> float:
     A = np.eye(3) * 2.0
     pgs.projected_gauss_seidel(A, np.ones(3), -np.ones(3), np.ones(3))
     pgs.solve_bounded(A, np.ones(3), -np.ones(3), np.ones(3))
+    from gsik.skinning import SkinBinding, skinned
+
+    one = np.ones((1, 3))
+    skinned(SkinBinding(one, one, np.zeros((1, 1)), np.ones((1, 1)), np.zeros(1), np.eye(4)[None], np.zeros((0, 3)),
+                        one), np.eye(4)[None])
     return time.perf_counter() - start
 
 

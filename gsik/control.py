@@ -148,9 +148,7 @@ class Controller:
         self._root = skeleton.frame_of(skeleton.root)
         self._state_cache = None  # (q, world_from_root, LevelState) of the last accepted pose
         self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
-        # _rest_damping: the next step starts from the base damping (new targets for a held pose); _last_held: the
-        # last step held the pose.
-        self._rest_damping = self._last_held = False
+        self._rest_damping = self._last_held = False  # start from the base damping; the last step held the pose
         self._layout = None  # (effector names, result names, task index of each) for results
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
@@ -193,8 +191,7 @@ class Controller:
             self._thresholds()
         self._state_cache = self._held = None
         self._stall.reset()
-        # A held pose's damping (up to MAX_DAMPING) was learnt on the old targets: new ones start afresh.
-        self._rest_damping = self._last_held
+        self._rest_damping = self._last_held  # a held pose's damping was learnt on the old targets: start afresh
 
     def _thresholds(self) -> None:
         """What depends on the row weights only: each level's rows, the error bounds (2, m) of the band and of

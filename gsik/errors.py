@@ -76,6 +76,10 @@ class PriorError(GsikError, ValueError):
     """A pose prior file or pose-prior data is invalid, or does not fit the skeleton."""
 
 
+class GltfError(GsikError, ValueError):
+    """A glTF file is malformed, unsafe (a URI outside its folder, sizes past the limits) or not a skinned humanoid."""
+
+
 class GsikFileError(GsikError, OSError):
     """A file could not be read or written (permission, missing folder, full disk).
 

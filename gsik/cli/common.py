@@ -22,8 +22,13 @@ class CommandError(GsikError):
 
 
 def load_any_skeleton(spec: str):
-    """A bundled skeleton by name, a skeleton YAML file, a URDF robot (``.urdf``) or a BVH clip's skeleton."""
+    """A bundled skeleton by name, a skeleton YAML file, a URDF robot (``.urdf``), a BVH clip's skeleton or a glTF
+    character's (``.glb``/``.gltf``)."""
     suffix = Path(spec).suffix.lower()
+    if suffix in (".glb", ".gltf"):
+        from gsik.io.gltf import read_character
+
+        return read_character(spec).skeleton
     if suffix == ".urdf":
         return skeleton_from_urdf(spec)
     if suffix == ".bvh":

@@ -15,6 +15,7 @@ from gsik.cli.track import cmd_track
 from gsik.cli.common import PROG
 from gsik.cli.humanoid import add_command as add_humanoid_command
 from gsik.cli.info import cmd_info
+from gsik.cli.gltf import add_command as add_gltf_command
 from gsik.cli.prior import add_commands as add_prior_commands
 from gsik.errors import GsikError, show_value
 
@@ -177,6 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_prior_commands(add, _add_common)
     add_humanoid_command(add)
+    add_gltf_command(add)
 
     p = add("bench", "the solver benchmarks (paper Table 1, tracking, stability, reach)",
             "Run the solver benchmarks of benchmarks/bench_solver.py and print them as Markdown.")

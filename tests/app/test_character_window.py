@@ -1,0 +1,74 @@
+"""A Blender-made glTF character in the real window: its skinned body drawn and posed by dragging, glTF export."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from blender.gltf_characters import Spec, blender_read
+from gltf_validator import assert_valid
+from test_window import _drag
+from waiting import wait_for
+
+from gsik.io.gltf import read_gltf
+from gsik.io.gltf.binding import skin_binding
+from gsik.skinning import skinned
+
+pytestmark = pytest.mark.gui
+
+
+def _frames(doc) -> np.ndarray:
+    T = np.zeros((doc.skeleton.n_frames, 4, 4))
+    T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = doc.world_rotations(), doc.world_positions(), 1.0
+    return T
+
+
+@pytest.fixture()
+def character_window(window, blender_character):
+    from gsik_studio.model.characters import character_of
+    from gsik_studio.skinned_body import SkinnedBody
+
+    path = blender_character(Spec("mixamo", "T", True))
+    assert window.files.import_skeleton_path(str(path), confirm=False) is True
+    character = character_of(window.doc.skeleton)
+    assert character is not None and isinstance(window.body.mannequin, SkinnedBody)
+    return window, character
+
+
+def test_the_characters_skinned_body_is_drawn_and_follows_a_drag(qtbot, character_window, tmp_path):
+    window, character = character_window
+    doc, body = window.doc, window.body.mannequin
+    mesh = body.meshes[0]
+    assert body.n_vertices == read_gltf(character.file.path).n_vertices >= 10_000
+    points = mesh.polydata.points  # the PolyData's own array: updated in place, never replaced
+    np.testing.assert_allclose(points, skinned(skin_binding(character), _frames(doc))[0], atol=1e-6)
+    name = character.effectors["left_hand"]
+    start = np.array(doc.targets[name].position)
+    hand = doc.effector_poses()[name][:3, 3].copy()
+    before = np.array(points)
+    _drag(window, start, (-70, 60))
+    moved = np.array(doc.targets[name].position)
+    assert np.linalg.norm(moved - start) > 0.05, "the drag did not move the target"
+    wait_for(qtbot, lambda: np.linalg.norm(doc.effector_poses()[name][:3, 3] - moved)
+             < 0.5 * np.linalg.norm(hand - moved))
+    wait_for(qtbot, lambda: np.abs(mesh.polydata.points - before).max() > 0.02)
+    assert mesh.polydata.GetPoints().GetData() is body.meshes[0].polydata.GetPoints().GetData()
+    np.testing.assert_allclose(mesh.polydata.points, skinned(skin_binding(character), _frames(doc))[0], atol=1e-6)
+    # File → Export glTF writes the pose on the character, which the validator passes and Blender shows
+    doc.history.set_clean()
+    out = tmp_path / "posed.glb"
+    assert window.files.export_gltf_path(str(out)) is True
+    assert_valid(out)
+    got = blender_read(out)
+    P = doc.world_positions()[doc.skeleton.joint_frame]
+    for bone, head in zip(got["bones"], got["pose_heads"]):
+        np.testing.assert_allclose(head, P[doc.skeleton.joint_names.index(bone)], atol=2e-5, err_msg=bone)
+
+
+def test_a_bad_character_changes_nothing(qtbot, window, boxes, tmp_path):
+    doc = window.doc
+    bad = tmp_path / "bad.gltf"
+    bad.write_text(json.dumps({"asset": {"version": "2.0"}, "nodes": [{"children": [0]}]}), encoding="utf-8")
+    assert window.files.import_skeleton_path(str(bad), confirm=False) is False
+    assert window.doc is doc and "child twice" in str(boxes["critical"][-1])
