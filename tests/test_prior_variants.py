@@ -116,7 +116,9 @@ def test_learn_prior_over_a_folder_learns_every_performer_and_refuses_one_clip_o
     assert main(["learn-prior", str(tmp_path), "--stride", "2", "--out", str(out)], out=text) == 0, text.getvalue()
     prior = read_prior(out)
     assert prior.n_frames == 2 * 2 * 12 and "every 2th frame of 2 clips of 2 performers" in prior.source
-    assert "performer 001" in text.getvalue() and "performer 002" in text.getvalue()
+    rows = {line.split()[0]: line.split()[1:3] for line in text.getvalue().splitlines()
+            if line.startswith(("001_01.bvh", "002_01.bvh"))}
+    assert rows == {"001_01.bvh": ["12", "001"], "002_01.bvh": ["12", "002"]}  # poses and performer per clip
     assert main(["learn-prior", str(tmp_path), "--frames", "5", "--out", str(out)], out=text) == 2
     assert "--frames applies to one clip only" in capsys.readouterr().err
 

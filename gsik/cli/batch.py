@@ -86,13 +86,22 @@ def run_clip(work: Callable[[str], ClipOutcome], path: str) -> ClipOutcome:
 
 
 def folder_clips(folder: str, out: str | None, out_suffixes: Sequence[str] = (".bvh",)) -> list[Path]:
-    """The folder's ``.bvh`` files in name order; refuses an empty folder and an ``--out`` that names a file."""
+    """The ``.bvh`` files under the folder (its subfolders too, as ``learn-prior`` reads them) in path order;
+    refuses an empty folder, two clips of one file name (their outputs would share a name in ``--out``) and an
+    ``--out`` that names a file."""
     try:
-        clips = sorted(p for p in Path(folder).iterdir() if p.suffix.lower() == ".bvh" and p.is_file())
+        clips = sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() == ".bvh" and p.is_file()
+                       and not p.is_symlink())
     except OSError as exc:
         raise CommandError(f"cannot list folder {folder!r}: {exc.strerror or exc}") from None
     if not clips:
         raise CommandError(f"folder {folder!r} holds no .bvh files")
+    seen: dict[str, Path] = {}
+    for p in clips:
+        if p.name in seen:
+            raise CommandError(f"folder {folder!r} holds two clips named {p.name!r} ({seen[p.name]} and {p}); "
+                               "their outputs would share one name")
+        seen[p.name] = p
     if out and Path(out).suffix.lower() in out_suffixes:
         raise CommandError(f"--out {out!r}: with a folder of clips, --out names a folder")
     return clips

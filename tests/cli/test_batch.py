@@ -106,9 +106,10 @@ def test_a_scheduler_that_is_not_an_address_is_bad_input(clips, monkeypatch):
 
 def test_learn_prior_from_a_folder_writes_one_prior_inside_out(clips, tmp_path):
     out = tmp_path / "prior"
-    code, text = run("learn-prior", str(clips), "--out", str(out), "--no-progress")
+    code, text = run("learn-prior", str(clips), "--stride", "1", "--out", str(out), "--no-progress")
     assert code == 4 and "b_broken.bvh" in text  # the broken clip is reported; the prior is learned without it
-    assert os.listdir(out) == ["prior.npz"] and read_prior(out / "prior.npz").n_frames == 109 + 60
+    # Every frame of both walks, and their mirror images (the bundled recipe).
+    assert os.listdir(out) == ["prior.npz"] and read_prior(out / "prior.npz").n_frames == 2 * (109 + 60)
 
 
 def test_the_local_pool_and_a_dask_local_cluster_write_the_same_bytes(clips, tmp_path):
@@ -137,3 +138,18 @@ def test_the_local_pool_and_a_dask_local_cluster_write_the_same_bytes(clips, tmp
     for name in ("a_walk.bvh", "c_walk.bvh", "prior.npz", "tracked/a_walk.bvh", "tracked/c_walk.bvh"):
         assert (local / name).read_bytes() == (remote / name).read_bytes(), name
     assert np.isfinite(read_prior(remote / "prior.npz").mean).all()
+
+
+def test_clips_in_subfolders_are_found_and_two_of_one_name_are_refused(tmp_path):
+    folder = tmp_path / "clips"
+    (folder / "performer_a").mkdir(parents=True)
+    shutil.copy(WALK, folder / "performer_a" / "walk_a.bvh")
+    shutil.copy(WALK, folder / "walk_b.bvh")
+    out = tmp_path / "out"
+    code, text = run("retarget", str(folder), "--out", str(out), "--workers", "1", "--no-progress")
+    assert code == 0, text
+    assert sorted(os.listdir(out)) == ["walk_a.bvh", "walk_b.bvh"]
+    (folder / "performer_b").mkdir()
+    shutil.copy(WALK, folder / "performer_b" / "walk_a.bvh")
+    code, text = run("retarget", str(folder), "--out", str(tmp_path / "out2"), "--no-progress")
+    assert code == 2 and not (tmp_path / "out2").exists()
