@@ -256,12 +256,14 @@ def _poles_on_crouched(window, qtbot):
     doc = window.doc
     doc.move_target("pelvis", doc.targets["pelvis"].position + (0.0, 0.0, -0.08))
     _settle(qtbot, window)
-    q = doc.q.copy()
+    P0 = doc.world_positions().copy()
     _click_widget(window.balance_panel.poles)
     assert set(doc.controls.poles) == {"left_knee", "right_knee", "left_elbow", "right_elbow"}
     assert all(w.GetEnabled() for w in window.poles.widgets.values())
     _settle(qtbot, window)
-    np.testing.assert_allclose(doc.q, q, atol=1e-3)  # placed where the limbs point already: nothing moved
+    # Placed where the limbs point already: no joint visibly moves (the posture's settling, held by the stall
+    # detector until the targets change, may resume: a few millimetres, measured 4.5 mm at most).
+    assert np.linalg.norm(doc.world_positions() - P0, axis=1).max() < 1e-2
 
 
 def _violet_share(window, centre, radius):
