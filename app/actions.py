@@ -41,6 +41,16 @@ def _view(name: str) -> Callable:
 
 VIEW_KEYS = (("front", "1"), ("side", "3"), ("top", "7"), ("perspective", "5"))
 
+#: The timeline's keys: (button of the timeline bar, menu text, key).
+TIMELINE_KEYS = (("previous_frame", "Previous frame", "Left"), ("next_frame", "Next frame", "Right"),
+                 ("previous_key", "Previous key", "Shift+Left"), ("next_key", "Next key", "Shift+Right"),
+                 ("key", "Key the pose", "K"), ("delete_key", "Delete key", "Shift+K"))
+
+
+def _timeline(button: str) -> Callable:
+    """Press one of the timeline bar's buttons (a disabled one does nothing)."""
+    return lambda w: w.timeline_bar.buttons[button].click()
+
 ACTIONS: tuple[ActionSpec, ...] = (
     ActionSpec("new", "&New", lambda w: w.files.new_pose(), K.New, "Start over from the standing pose"),
     ActionSpec("open", "&Open…", lambda w: w.files.open_dialog(), K.Open, "Open a pose file", S.SP_DialogOpenButton),
@@ -83,6 +93,7 @@ ACTIONS: tuple[ActionSpec, ...] = (
     ActionSpec("trackball", "Trackball orbit", lambda w, on: w.set_orbit("trackball" if on else "turntable"), None,
                "Orbit freely (the horizon may roll); off: turntable, z stays up", checkable=True),
     ActionSpec("shortcuts", "&Shortcuts", lambda w: w.show_shortcuts(), "F1", "List the keyboard and mouse controls"),
+    *(ActionSpec(f"timeline_{n}", text, _timeline(n), key) for n, text, key in TIMELINE_KEYS),
     ActionSpec("sticks", "Stick figure", lambda w, on: w.set_body("sticks" if on else "mannequin"), None,
                "Draw the body as sticks instead of the mannequin", checkable=True),
 )
@@ -94,6 +105,7 @@ MENUS = (
     ("&Edit", ("undo", "redo")),
     ("&Pose", ("root_left", "root_right", None, "reset", "random", "mirror_lr", "mirror_rl", "walk", "scenarios")),
     ("&View", ("frame", "frame_selected", None, *(f"view_{n}" for n, _ in VIEW_KEYS), None, "trackball", "sticks")),
+    ("&Timeline", tuple(f"timeline_{n}" for n, _, _ in TIMELINE_KEYS)),
     ("&Solver", ("pause",)),
     ("&Help", ("shortcuts",)),
 )

@@ -83,15 +83,18 @@ class FileActions:
         return self.open_path(path, confirm=False)
 
     def open_path(self, path: str, confirm: bool = True) -> bool:
-        """Open a pose file; on error show it and keep the current pose. True on success."""
+        """Open a pose file on its own skeleton (a new document in this window when it is not this document's);
+        on error show it and keep the current document as it was. True on success."""
         if confirm and not self.confirm_discard("open another pose"):
             return False
         self._stop_playback()
         try:
-            warnings = self.doc.open(path)
+            doc, warnings = transfer.open_pose(path, self.doc)  # a new document is built completely first
         except gsik.GsikError as exc:
             return self._failed(f"Could not open {os.path.basename(path)}: {exc}", "Could not open pose",
                                 f"The pose file could not be opened; nothing was changed.\n\n{exc}")
+        if doc is not self.doc:
+            self._show_document(doc)
         self.add_recent(path)
         if warnings:
             self._message(f"Opened {os.path.basename(path)} with {len(warnings)} warning(s)", 10000)
@@ -149,9 +152,9 @@ class FileActions:
                                 f"The BVH clip could not be imported; nothing was changed.\n\n{exc}")
         name = os.path.basename(path)
         motion = transfer.motion_on(self.doc.skeleton, imported.motion)
-        if motion is None:  # another skeleton: a document of its own
+        if motion is None:  # another skeleton: a document of its own, its clip placed on the grid
             doc = transfer.document_for(imported.skeleton)
-            doc.timeline.load(imported.motion, name, f"Import {name}")
+            doc.timeline.load(transfer.placed_on_grid(imported.motion), name, f"Import {name}")
             shown = self._show_new(doc, new_window, "import a clip of another skeleton")
             if shown is False:
                 return False
@@ -199,20 +202,26 @@ class FileActions:
         return True
 
     def export_bvh_dialog(self) -> bool:
+        """Ask the up axis and units (:class:`ExportOptionsDialog`), then the file; export."""
+        from gsik_studio.widgets.export_options import ExportOptionsDialog
+
+        dialog = ExportOptionsDialog(self.parent, self.settings)
+        if dialog.exec() != QtWidgets.QDialog.Accepted:
+            return False
         path = self._path("Export BVH", BVH_FILTER, "motion.bvh")
         if path and not os.path.splitext(path)[1]:
             path += ".bvh"
-        return self.export_bvh_path(path) if path else False
+        return self.export_bvh_path(path, dialog.options()) if path else False
 
-    def export_bvh_path(self, path: str) -> bool:
+    def export_bvh_path(self, path: str, options: transfer.BvhExportOptions = transfer.BvhExportOptions()) -> bool:
         """Write the clip, else the key sequence, else the pose as BVH; False, saying why, on error."""
         self._stop_playback()
         try:
-            what = transfer.export_bvh(self.doc, path)
+            what = transfer.export_bvh(self.doc, path, options)
         except gsik.GsikError as exc:
             return self._failed(f"Could not export: {exc}", "Could not export BVH",
                                 f"Nothing was written (any existing file is unchanged).\n\n{exc}")
-        self._message(f"Exported the {what} to {path}", 6000)
+        self._message(f"Exported the {what} to {path} ({options.up} up, {options.units})", 6000)
         return True
 
     def _failed(self, status: str, title: str, text: str) -> bool:

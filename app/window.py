@@ -266,7 +266,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.act_redo.setIconText("Redo")
 
     def _show_title(self) -> None:
-        self.setWindowTitle(f"{self.doc.title}[*] — gsik studio")
+        self.setWindowTitle(f"{self.doc.title}[*] — {self.doc.skeleton.name} — gsik studio")
         self.setWindowModified(self.doc.dirty)
 
     def _show_selection(self, name: str | None) -> None:

@@ -27,12 +27,12 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from functools import cached_property
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from gsik.errors import PriorError, choices
+from gsik.io.bundled import bundled_dir
 from gsik.io.files import atomic_write_bytes
 from gsik.io.npz import Member, npz_bytes, read_npz_members
 from gsik.skeleton import Skeleton
@@ -223,7 +223,7 @@ def _check_metadata(data: dict[str, np.ndarray], path) -> None:
 
 def bundled_prior_path(skeleton: str = "biped") -> Path:
     """Where the prior bundled for ``skeleton`` lives (``skeletons/<name>_prior.npz``)."""
-    return Path(str(resources.files("gsik.skeletons"))) / f"{skeleton}_prior.npz"
+    return bundled_dir() / f"{skeleton}_prior.npz"
 
 
 def bundled_prior(skeleton: str = "biped") -> PosePrior:

@@ -37,3 +37,25 @@ def test_built_package_finds_the_bundled_biped_and_starts_without_compiling(tmp_
     assert has_file == "True" and n_dofs == "30"
     # The first start loaded every kernel it ran from the cache the build wrote: nothing compiled.
     assert int(hits) > 0 and int(misses) == 0, f"cache hits {hits}, misses {misses}"
+
+
+def test_run_from_the_clones_root_the_source_trees_gsik_finds_the_bundled_data(tmp_path):
+    # Run from a clone's root after a plain install, Python imports the clone's own gsik/ (the current folder comes
+    # first on sys.path), which holds no gsik.skeletons package: the bundled data must then be the clone's
+    # skeletons/ folder. -S keeps site's .pth files (this venv's editable install, which maps gsik.skeletons) out;
+    # the dependencies come from the venv's site-packages folder, added by hand.
+    import sysconfig
+
+    purelib = sysconfig.get_paths()["purelib"]
+    code = ("import sys; sys.path.append(%r); import gsik; from gsik.prior import bundled_prior; "
+            "from gsik.cli import main; "
+            "import importlib.util as u; print(u.find_spec('gsik.skeletons') is None); print(gsik.__file__); "
+            "print(gsik.bundled_skeletons()); print(gsik.load_skeleton('biped').n_dofs); "
+            "print(bundled_prior('biped').mean.shape); sys.exit(main(['info', 'biped']))" % purelib)
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "PYTHON"))}
+    out = subprocess.run([sys.executable, "-S", "-c", code], cwd=ROOT, capture_output=True, text=True, env=env)
+    assert out.returncode == 0, out.stderr
+    no_package, gsik_path, bundled, n_dofs, prior_shape, *info = out.stdout.splitlines()
+    assert no_package == "True" and gsik_path == str(ROOT / "gsik" / "__init__.py")
+    assert "biped" in bundled and n_dofs == "30" and prior_shape == "(30,)"
+    assert any("biped" in line for line in info)

@@ -34,6 +34,7 @@ from gsik_studio.model.mirror import mirror_map
 from gsik_studio.model.pins import SolveControls, default_levels
 from gsik_studio.model.poses import RootPlacement, check_pose, driven_target, standing_pose, target_at
 from gsik_studio.model.timeline import Timeline
+from gsik_studio.model.words import names_words, words
 
 if TYPE_CHECKING:
     from gsik_studio.model.playback import Playback
@@ -229,7 +230,7 @@ class Document:
             self._push_targets()
 
         signal = self.events.targets if same_flags else self.events.options
-        self._edit(text or f"Edit {name} target", apply, merge_key, signal)
+        self._edit(text or f"Edit {words(name)} target", apply, merge_key, signal)
 
     def move_targets(self, positions: Mapping[str, Sequence[float]], drag: object | None = None) -> None:
         """Move several targets at once (one undo step; merged over one ``drag`` token)."""
@@ -240,7 +241,7 @@ class Document:
             self._push_targets()
 
         key = None if drag is None else ("move", tuple(sorted(new)), drag)
-        self._edit(f"Move {', '.join(new)}", apply, key, self.events.targets)
+        self._edit(f"Move {names_words(new)}", apply, key, self.events.targets)
 
     def move_target(self, name: str, position, drag: object | None = None) -> None:
         """Move a target to a world position (3,) [m].
@@ -249,7 +250,7 @@ class Document:
         into one undo step; ``None`` makes a step of its own.
         """
         t = self._effector(name).replace(position=position)
-        self.set_target(name, t, f"Move {name}", None if drag is None else ("move", name, drag))
+        self.set_target(name, t, f"Move {words(name)}", None if drag is None else ("move", name, drag))
 
     def end_drag(self) -> None:
         """A mouse drag ended: the next move is a new undo step."""
@@ -258,7 +259,7 @@ class Document:
     def orient_target(self, name: str, orientation, drag: object | None = None) -> None:
         """Set a target's world orientation: quaternion (w, x, y, z) or matrix (3, 3)."""
         t = self._effector(name).replace(orientation=orientation)  # a matrix is kept as the rotation
-        self.set_target(name, t, f"Rotate {name}", None if drag is None else ("rotate", name, drag))
+        self.set_target(name, t, f"Rotate {words(name)}", None if drag is None else ("rotate", name, drag))
 
     def rotate_target(self, name: str, axis: str, angle: float) -> None:
         """Turn a target by ``angle`` [rad] about the world ``axis`` ("x", "y" or "z") through its centre."""
@@ -266,8 +267,7 @@ class Document:
             raise ValueError(f"axis must be one of {choices(WORLD_AXES)}, got {axis!r}")
         t = self._effector(name)
         R = matrix_from_axis_angle(np.array(WORLD_AXES[axis]), angle) @ t.rotation
-        self.set_target(name, t.replace(orientation=R),
-                        f"Rotate {name} about {axis}")
+        self.set_target(name, t.replace(orientation=R), f"Rotate {words(name)} about {axis}")
 
     def set_target_options(self, name: str, *, enabled: bool | None = None, weight: float | None = None,
                            position_only: bool | None = None, priority: int | None = None) -> None:
@@ -279,12 +279,12 @@ class Document:
         if new == t:
             return
         what = ", ".join(f"{k} {v}" for k, v in changes.items())
-        self.set_target(name, new, f"Set {name} {what}")
+        self.set_target(name, new, f"Set {words(name)} {what}")
 
     def snap_target(self, name: str) -> None:
         """Move one target onto its effector's achieved pose."""
         t = self._effector(name)
-        self.set_target(name, target_at(self.solver.effector_poses()[name], t), f"Snap {name}")
+        self.set_target(name, target_at(self.solver.effector_poses()[name], t), f"Snap {words(name)}")
 
     def set_root(self, name: str) -> None:
         """Pin another joint or site (usually the other foot); no joint moves.
@@ -306,7 +306,7 @@ class Document:
             self._targets = {n: new[n] for n in self.solver.effector_names}
             self._push_targets()
 
-        self._edit(f"Root on {name}", apply)
+        self._edit(f"Root on {words(name)}", apply)
 
     def set_pose(self, pose: Pose, text: str = "Set pose") -> None:
         """Replace the whole pose (angles, root, targets) as one undo step."""

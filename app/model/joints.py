@@ -14,6 +14,7 @@ import numpy as np
 from gsik.errors import choices
 from gsik_studio.model.document import Document
 from gsik_studio.model.events import Signal
+from gsik_studio.model.words import dof_words
 
 AXIS_NAMES = "xyz"
 
@@ -101,5 +102,5 @@ class JointEditor:
             raise ValueError(f"DOF index must be in 0..{sk.n_dofs - 1}, got {dof}")
         q = self.doc.q
         q[dof] = float(np.clip(angle, sk.lower[dof], sk.upper[dof]))
-        self.doc.set_angles(q, f"Turn {sk.dof_names[dof]}", snap_targets=self.targets_follow, drag=drag)
+        self.doc.set_angles(q, f"Turn {dof_words(sk.dof_names[dof])}", snap_targets=self.targets_follow, drag=drag)
         return float(q[dof])

@@ -50,9 +50,10 @@ def show_kept(doc: Document, kept: Kept) -> None:
 
 def file_fields(kept: Kept) -> dict:
     """The keyword arguments of :func:`gsik.io.pose.write_pose` that save ``kept``."""
-    tl = kept.timeline
+    tl, new = kept.timeline, TimelineState()
+    own_timeline = tl.keys or (tl.fps, tl.length) != (new.fps, new.length)  # else a new document's: no block
     return dict(library=kept.library,
-                keys=KeySequence(tl.keys, tl.fps, tl.length) if tl.keys else None,
+                keys=KeySequence(tl.keys, tl.fps, tl.length) if own_timeline else None,
                 poles={n: Pole(tuple(t.position), t.enabled) for n, t in kept.poles},
                 clip=Clip(tl.name, tl.clip) if tl.clip is not None else None)
 
@@ -74,7 +75,6 @@ def kept_from_file(doc: Document, read: PoseRead) -> Kept:
     poles = tuple((n, Target(p.position, position_only=True, enabled=p.enabled, priority=POLE))
                   for n, p in read.poles.items())
     timeline = TimelineState(read.clip.motion if read.clip else None, read.clip.name if read.clip else "", keys)
-    if read.keys is not None:  # a length up to the last key is the timeline's own (0), as a new sequence has
-        last = max((f for f, _ in keys), default=-1)
-        timeline = timeline._replace(fps=read.keys.fps, length=read.keys.length if read.keys.length > last + 1 else 0)
+    if read.keys is not None:  # the file's timeline (a file without ``keys`` gets a new document's)
+        timeline = timeline._replace(fps=read.keys.fps, length=max(read.keys.length, 1))
     return Kept(read.library, timeline, poles)

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from gsik import validate
 from gsik.anim.motion import Motion
 from gsik.errors import GsikError
+from gsik.io.pose.model import MAX_FPS
 from gsik.io.pose.sequence import MAX_SEQUENCE_FRAMES
 from gsik.io.pose import Pose
 from gsik.targets import Target
@@ -33,6 +34,9 @@ if TYPE_CHECKING:
 #: Frame time of keyed sequences [s] (30 frames per second), unless a file says otherwise.
 KEY_FRAME_TIME = 1 / 30
 
+#: Frames of a new document's timeline (3 s at 30 fps): room to key poses before any clip is loaded.
+DEFAULT_LENGTH = 90
+
 
 class TimelineState(NamedTuple):
     """What a document keeps of its timeline (immutable: the undo history and pose files hold it).
@@ -41,15 +45,15 @@ class TimelineState(NamedTuple):
         clip: The motion on the timeline, or None.
         name: The clip's name ("" without a clip).
         keys: ``((frame, Pose), ...)`` keyed poses in frame order.
-        fps: Frames per second of the key sequence.
-        length: Frames the key sequence spans at least (0: up to its last key).
+        fps: Frames per second of the keys' timeline.
+        length: Frames of the keys' timeline (at least 1, and past the last key).
     """
 
     clip: Motion | None = None
     name: str = ""
     keys: tuple[tuple[int, Pose], ...] = ()
     fps: float = 1 / KEY_FRAME_TIME
-    length: int = 0
+    length: int = DEFAULT_LENGTH
 
 
 class TimelineEvents:
@@ -79,8 +83,8 @@ class Timeline:
         clip: The motion on the timeline (None: the keys play, if any).
         name: The clip's name (undo texts: "Walk", "Scrub Walk").
         keys: ``{frame: Pose}`` keyed poses (used when there is no clip).
-        key_fps: Frames per second of the key sequence.
-        key_length: Frames the key sequence spans at least (0: up to its last key).
+        key_fps: Frames per second of the keys' timeline (shown when there is no clip).
+        key_length: Frames of the keys' timeline (at least 1, past the last key), with or without keys.
         frame: The current frame index.
         playing: True while the clock moves the frame.
         loop: True to start over at the end instead of stopping there.
@@ -114,10 +118,10 @@ class Timeline:
 
     @property
     def n_frames(self) -> int:
-        """Frames on the timeline: the clip's, else up to the last key (at least the current frame)."""
+        """Frames on the timeline: the clip's, else the keys' timeline length (always past the last key)."""
         if self.clip is not None:
             return self.clip.n_frames
-        return max([self.frame, *self.keys, self.key_length - 1]) + 1 if self.keys else 1
+        return max([*self.keys, self.key_length - 1, 0]) + 1
 
     @property
     def frame_time(self) -> float:
@@ -138,8 +142,8 @@ class Timeline:
 
     def discard(self) -> None:
         """Take the clip off the timeline (the pose shown stays): one undo step."""
-        if self.clip is not None:
-            self._change(f"Discard {self.name or 'clip'}", clip=None, name="", frame=0)
+        if self.clip is not None:  # the keys' timeline (length, fps, keys) shows again
+            self._change(f"Discard {self.name or 'clip'}", clip=None, name="")
 
     # -- state kept in the document ----------------------------------------------------------
     def snapshot(self) -> TimelineState:
@@ -172,7 +176,8 @@ class Timeline:
         if self.clip is not None:
             raise GsikError(f"the timeline holds the clip {self.name!r}: discard it before keying poses")
         f = self.frame if frame is None else self._check_frame(frame)
-        self._change(f"Add key at frame {f}", keys=tuple(sorted({**self.keys, f: self.doc.pose()}.items())))
+        self._change(f"Add key at frame {f}", keys=tuple(sorted({**self.keys, f: self.doc.pose()}.items())),
+                     length=max(self.key_length, f + 1))
         return f
 
     def move_key(self, old: int, new: int) -> None:
@@ -181,13 +186,46 @@ class Timeline:
         new = self._check_frame(new)
         if new != old:
             keys = {f: p for f, p in self.keys.items() if f != old}
-            self._change(f"Move key {old} to {new}", keys=tuple(sorted({**keys, new: pose}.items())))
+            self._change(f"Move key {old} to {new}", keys=tuple(sorted({**keys, new: pose}.items())),
+                         length=max(self.key_length, new + 1))
 
     def delete_key(self, frame: int) -> None:
         """Delete the key at ``frame``. One undo step."""
         self._key(frame)
         self._change(f"Delete key at frame {frame}", keys=tuple((f, p) for f, p in sorted(self.keys.items())
                                                                  if f != frame))
+
+    def set_length(self, frames: int) -> None:
+        """Frames of the keys' timeline (whole, at least 1 and past the last key): one undo step.
+
+        Raises:
+            GsikError: a length that is not a whole number in range, or one that would cut off a key.
+        """
+        need = max(self.keys, default=0) + 1
+        n = validate.whole(frames, "the timeline's length" + (f" (a key is at frame {need - 1})" if self.keys else ""),
+                           GsikError, minimum=need, floats=True, maximum=MAX_SEQUENCE_FRAMES)
+        if n != self.key_length:
+            self._change(f"Set timeline length to {n} frames", length=n)
+
+    def set_fps(self, fps: float) -> None:
+        """Frames per second of the keys' timeline (above 0, at most :data:`MAX_FPS`): one undo step."""
+        fps = validate.positive(fps, "the timeline's frames per second", GsikError)
+        if fps > MAX_FPS:
+            raise GsikError(f"the timeline's frames per second must be at most {MAX_FPS:g}, got {fps!r}")
+        if fps != self.key_fps:
+            self._change(f"Set timeline to {fps:g} fps", fps=fps)
+
+    def step_frame(self, delta: int) -> None:
+        """Show the frame ``delta`` frames on (negative: back), clamped to the timeline; one scrub."""
+        self.scrub(self.frame + int(delta))
+        self.end_scrub()
+
+    def jump_to_key(self, direction: int) -> None:
+        """Show the next key after the current frame (``direction`` > 0) or the one before it (< 0), if any."""
+        keys = [k for k in sorted(self.keys) if (k > self.frame if direction > 0 else k < self.frame)]
+        if keys:
+            self.scrub(keys[0] if direction > 0 else keys[-1])
+            self.end_scrub()
 
     def _key(self, frame: int) -> Pose:
         if frame not in self.keys:

@@ -8,13 +8,17 @@ a :class:`gsik.GsikError` on a bad file before anything in a document changes.
 from __future__ import annotations
 
 import os
+from typing import NamedTuple
 
 import numpy as np
 
 import gsik
 from gsik.anim.motion import Motion
 from gsik.io.bvh import read_bvh
+from gsik.cli.common import load_any_skeleton
 from gsik.io.bvh_skeleton import BvhImport, import_bvh, write_motion_bvh
+from gsik.io.pose import read_pose_document
+from gsik.io.pose.read import names_a_skeleton_file
 from gsik.io.urdf_skeleton import skeleton_from_urdf
 from gsik.targets import MAX_COORDINATE
 from gsik_studio.model.document import Document
@@ -75,6 +79,18 @@ def motion_on(skeleton: gsik.Skeleton, motion: Motion) -> Motion | None:
     return Motion(skeleton, motion.q[:, kept], motion.roots, motion.world_from_root, motion.frame_time)
 
 
+def placed_on_grid(motion: Motion) -> Motion:
+    """``motion`` moved, not turned, so that its first frame stands on the grid: the skeleton's first frame (a BVH
+    clip's root joint, the hips) over the origin, and the first frame's lowest point on the ground (z = 0).
+
+    Every frame moves by the same offset [m], so the motion itself (steps, jumps, turns) is kept.
+    """
+    P = motion.frames(0)[1]  # (n_skeleton_frames, 3) [m]
+    W = np.array(motion.world_from_root)
+    W[:, :3, 3] -= [P[0, 0], P[0, 1], P[:, 2].min()]
+    return Motion(motion.skeleton, motion.q, motion.roots, W, motion.frame_time)
+
+
 def read_skeleton(path: str | os.PathLike) -> gsik.Skeleton:
     """A skeleton from a YAML file or a URDF file (by its ending, :data:`URDF_SUFFIXES`).
 
@@ -87,6 +103,39 @@ def read_skeleton(path: str | os.PathLike) -> gsik.Skeleton:
         skeleton = gsik.load_skeleton(path)
     check_poseable(skeleton, os.fspath(path))
     return skeleton
+
+
+def pose_skeleton(path: str | os.PathLike, current: gsik.Skeleton) -> gsik.Skeleton:
+    """The skeleton a pose file opens on: the one its ``skeleton:`` field names.
+
+    ``current`` when the field is its name (or missing: then the file is read against it); a bundled skeleton by
+    name; a skeleton file (YAML, URDF, BVH) by its path, relative to the pose file.
+
+    Raises:
+        GsikError: the file cannot be read, or names a skeleton that is neither ``current``, bundled nor a file.
+    """
+    spec = read_pose_document(path).skeleton
+    if spec is None or spec == current.name:
+        return current
+    if spec in gsik.bundled_skeletons() or names_a_skeleton_file(spec):
+        return load_any_skeleton(spec)
+    raise gsik.PoseError(f"{os.fspath(path)}: the pose is for skeleton {spec!r}, which is not bundled "
+                         f"({', '.join(gsik.bundled_skeletons())}) nor the skeleton shown ({current.name!r}): "
+                         f"import that skeleton first, then open the pose")
+
+
+def open_pose(path: str | os.PathLike, doc: Document) -> tuple[Document, tuple[str, ...]]:
+    """Open a pose file on its own skeleton: into ``doc`` when it is of ``doc``'s skeleton, else into a new
+    document built completely first; returns (the document holding it, the reader's warnings).
+
+    Raises:
+        GsikError: nothing changed (``doc`` is left exactly as it was).
+    """
+    skeleton = pose_skeleton(path, doc.skeleton)
+    if skeleton is doc.skeleton:
+        return doc, doc.open(path)
+    new = document_for(skeleton)
+    return new, new.open(path)
 
 
 def document_for(skeleton: gsik.Skeleton) -> Document:
@@ -105,14 +154,24 @@ def export_source(doc: Document) -> tuple[str, Motion]:
     return "pose", Motion(doc.skeleton, doc.q[None, :], (doc.root,), W[None], 1 / 30)
 
 
-def export_bvh(doc: Document, path: str | os.PathLike, units: str = "cm", up: str = "z") -> str:
+class BvhExportOptions(NamedTuple):
+    """How Export BVH writes: the file's up axis ("y" or "z") and length unit ("cm" or "m").
+
+    The default, y-up centimetres, is what Blender's BVH importer expects by default: the figure comes in standing.
+    """
+
+    up: str = "y"
+    units: str = "cm"
+
+
+def export_bvh(doc: Document, path: str | os.PathLike, options: BvhExportOptions = BvhExportOptions()) -> str:
     """Write :func:`export_source` as BVH (gsik's Blender-compatible writer); returns what was written.
 
     Raises:
         GsikFileError, BvhError: nothing was written.
     """
     what, motion = export_source(doc)
-    write_motion_bvh(path, motion, units=units, up=up)
+    write_motion_bvh(path, motion, units=options.units, up=options.up)
     return what
 
 

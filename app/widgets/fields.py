@@ -146,3 +146,32 @@ class FieldForm(QtWidgets.QGroupBox):
         except gsik.GsikError:
             pass
         self.show_model()
+
+
+#: The editors whose value the mouse wheel changes (spin boxes, sliders, combo boxes).
+WHEEL_EDITORS = (QtWidgets.QAbstractSpinBox, QtWidgets.QAbstractSlider, QtWidgets.QComboBox)
+
+
+class WheelGuard(QtCore.QObject):
+    """Lets the wheel change an editor's value only while the editor has the keyboard focus.
+
+    Without focus the wheel event is ignored and handed on to the parents, so the panel's scroll area scrolls
+    under the pointer instead of a spin box turning a joint. :func:`guard_wheel` installs it.
+    """
+
+    def eventFilter(self, watched: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802 (Qt's name)
+        if event.type() == QtCore.QEvent.Wheel and not watched.hasFocus():
+            event.ignore()  # not accepted: Qt offers it to the parent widgets (the scroll area)
+            return True
+        return False
+
+
+def guard_wheel(root: QtWidgets.QWidget) -> WheelGuard:
+    """Guard every wheel-driven editor inside ``root``: a click or Tab focuses it (``Qt.StrongFocus``, never the
+    wheel), and the wheel changes it only while focused. Returns the guard (owned by ``root``)."""
+    guard = WheelGuard(root)
+    for kind in WHEEL_EDITORS:
+        for w in root.findChildren(kind):
+            w.setFocusPolicy(QtCore.Qt.StrongFocus)
+            w.installEventFilter(guard)
+    return guard

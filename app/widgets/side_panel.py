@@ -12,6 +12,7 @@ from gsik_studio.model import Document
 from gsik_studio.model.joints import JointEditor
 from gsik_studio.widgets.balance_panel import balance_panel
 from gsik_studio.widgets.effectors import EffectorsPanel
+from gsik_studio.widgets.fields import guard_wheel
 from gsik_studio.widgets.joint_panel import JointPanel
 from gsik_studio.widgets.library import LibraryPanel
 from gsik_studio.widgets.selected import SelectedTargetPanel
@@ -60,6 +61,7 @@ class SidePanel(QtWidgets.QScrollArea):
         self.setWidgetResizable(True)
         self.setFrameShape(QtWidgets.QFrame.NoFrame)
         self.setHorizontalScrollBarPolicy(Qt.ScrollBarAlwaysOff)  # the dock is as wide as the panels need
+        self.wheel_guard = guard_wheel(panel)  # the wheel scrolls the panel; it edits only a focused field
 
     def dock_width(self) -> int:
         """The least dock width [px] that shows every panel whole beside the vertical scroll bar."""

@@ -12,9 +12,14 @@ from collections.abc import Callable
 from PySide6 import QtCore, QtGui, QtWidgets
 from PySide6.QtCore import Qt
 
+from gsik.io.pose.model import MAX_FPS
+from gsik.io.pose.sequence import MAX_SEQUENCE_FRAMES
 from gsik_studio.model.timeline import Timeline
+from gsik_studio.widgets.fields import guard_wheel
 
 S = QtWidgets.QStyle
+LENGTH_TIP = "Frames on the timeline: key poses anywhere on it (a clip shows its own)"
+FPS_TIP = "Frames per second the keyed poses play at"
 KEY_COLOR = QtGui.QColor("#f0c040")
 KEY_GRAB_PX = 6  # a press this close to a key mark drags the key
 
@@ -104,7 +109,11 @@ BUTTONS = (
     ("play", S.SP_MediaPlay, "Play or pause the timeline"),
     ("stop", S.SP_MediaStop, "Stop and go back to the first frame"),
     ("loop", S.SP_BrowserReload, "Loop: start over at the end"),
-    ("key", S.SP_DialogApplyButton, "Key the current pose at the current frame"),
+    ("previous_key", S.SP_MediaSkipBackward, "Go to the key before the current frame (Shift+Left)"),
+    ("previous_frame", S.SP_MediaSeekBackward, "One frame back (Left)"),
+    ("next_frame", S.SP_MediaSeekForward, "One frame on (Right)"),
+    ("next_key", S.SP_MediaSkipForward, "Go to the key after the current frame (Shift+Right)"),
+    ("key", S.SP_DialogApplyButton, "Key the current pose at the current frame (K)"),
     ("delete_key", S.SP_DialogDiscardButton, "Delete the key at the current frame"),
     ("discard", S.SP_TrashIcon, "Discard the clip from the timeline (the pose stays)"),
 )
@@ -139,7 +148,12 @@ class TimelineBar(QtWidgets.QWidget):
         self.label.setMinimumWidth(170)
         self.label.setFont(QtGui.QFontDatabase.systemFont(QtGui.QFontDatabase.FixedFont))
         layout.addWidget(self.label)
+        self.length = _spin(QtWidgets.QSpinBox, 1, MAX_SEQUENCE_FRAMES, " frames", LENGTH_TIP)
+        self.fps = _spin(QtWidgets.QDoubleSpinBox, 1, MAX_FPS, " fps", FPS_TIP)
+        for w in (self.length, self.fps):
+            layout.addWidget(w)
         self._connect()
+        self.wheel_guard = guard_wheel(self)  # the wheel changes the length or fps only once clicked into
         self.show_content()
 
     def _connect(self) -> None:
@@ -150,6 +164,11 @@ class TimelineBar(QtWidgets.QWidget):
         b["key"].clicked.connect(lambda: self._run(tl.add_key))
         b["delete_key"].clicked.connect(lambda: self._run(lambda: tl.delete_key(tl.frame)))
         b["discard"].clicked.connect(tl.discard)
+        for name, command in (("previous_key", lambda: tl.jump_to_key(-1)), ("previous_frame", lambda: tl.step_frame(-1)),
+                              ("next_frame", lambda: tl.step_frame(1)), ("next_key", lambda: tl.jump_to_key(1))):
+            b[name].clicked.connect(command)
+        self.length.valueChanged.connect(lambda n: self._run(lambda: tl.set_length(n)))
+        self.fps.valueChanged.connect(lambda fps: self._run(lambda: tl.set_fps(fps)))
         self.slider.scrubbed.connect(tl.scrub)
         self.slider.released.connect(tl.end_scrub)
         self.slider.key_moved.connect(lambda old, new: self._run(lambda: tl.move_key(old, new)))
@@ -165,6 +184,7 @@ class TimelineBar(QtWidgets.QWidget):
             ok = command()
         except GsikError as exc:
             self._report(str(exc))
+            self.show_content()  # a refused length or fps shows the timeline's own again
             ok = None
         if ok is False:
             self._report("Nothing to play: walk, load a scenario, import a clip or key a pose first")
@@ -178,7 +198,11 @@ class TimelineBar(QtWidgets.QWidget):
         has_clip = tl.clip is not None
         self.buttons["discard"].setEnabled(has_clip)
         self.buttons["key"].setEnabled(not has_clip)
-        self.buttons["delete_key"].setEnabled(bool(tl.keys))
+        self.buttons["delete_key"].setEnabled(bool(tl.keys) and not has_clip)
+        for w, value in ((self.length, tl.n_frames), (self.fps, 1 / tl.frame_time)):
+            with QtCore.QSignalBlocker(w):
+                w.setValue(value)
+            w.setEnabled(not has_clip)  # a clip has its own frames; the keys' timeline shows again once discarded
         self.slider.update()
         self.show_frame()
 
@@ -198,3 +222,15 @@ class TimelineBar(QtWidgets.QWidget):
             with QtCore.QSignalBlocker(self.buttons[name]):
                 self.buttons[name].setChecked(on)
         self.buttons["play"].setIcon(self.style().standardIcon(S.SP_MediaPause if tl.playing else S.SP_MediaPlay))
+
+
+def _spin(kind, lo: float, hi: float, suffix: str, tip: str) -> QtWidgets.QAbstractSpinBox:
+    """A spin box for the timeline's length or fps: one value per finished entry."""
+    w = kind()
+    w.setRange(lo, hi)
+    w.setSuffix(suffix)
+    w.setToolTip(tip)
+    w.setKeyboardTracking(False)
+    if isinstance(w, QtWidgets.QDoubleSpinBox):
+        w.setDecimals(2)
+    return w

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import os
-from importlib import resources
 from pathlib import Path
 
 from gsik.errors import GsikFileError, SkeletonError, choices, show_value
 from gsik import validate
+from gsik.io.bundled import bundled_dir
 from gsik.io.files import read_text
 from gsik.io.yaml_safe import MAX_BYTES, load_yaml
 from gsik.rotations import matrix_from_quaternion
@@ -18,8 +18,8 @@ FORMAT_VERSION = 1
 
 
 def _bundled_dir() -> Path:
-    """The folder of the bundled skeletons: the ``gsik.skeletons`` package (the repository's ``skeletons/``)."""
-    return Path(str(resources.files("gsik.skeletons")))
+    """The folder of the bundled skeletons (:func:`gsik.io.bundled.bundled_dir`)."""
+    return bundled_dir()
 
 
 def bundled_skeletons() -> tuple[str, ...]:

@@ -135,7 +135,7 @@ def test_dragging_a_ring_turns_its_joint_within_limits_as_one_undo_step(window, 
     u, v = m_px - c_px, end - c_px
     assert np.degrees(np.arccos(u @ v / np.linalg.norm(u) / np.linalg.norm(v))) < 3.0
     assert sk.lower[i] <= doc.q[i] <= sk.upper[i]
-    assert len(doc.history.commands) == n + 1 and doc.history.undo_text == "Turn left_shoulder.y"
+    assert len(doc.history.commands) == n + 1 and doc.history.undo_text == "Turn left shoulder (y)"
     _settle(qtbot, window)
     assert doc.q[i] - q0[i] == pytest.approx(turned, abs=1e-3)  # the targets followed: the turn holds
     doc.undo()
@@ -155,7 +155,7 @@ def test_typing_an_angle_turns_the_joint_and_stays_within_limits(window, qtbot):
     QTest.keyClicks(spin.lineEdit(), "45")
     QTest.keyClick(spin.lineEdit(), QtCore.Qt.Key_Return)
     assert np.degrees(doc.q[i]) == pytest.approx(45.0, abs=1e-6)
-    assert doc.history.undo_text == "Turn right_elbow.x"
+    assert doc.history.undo_text == "Turn right elbow (x)"
     assert spin.minimum() == pytest.approx(np.degrees(doc.skeleton.lower[i]), abs=0.05)
     assert spin.maximum() == pytest.approx(np.degrees(doc.skeleton.upper[i]), abs=0.05)
     spin.lineEdit().selectAll()

@@ -111,3 +111,15 @@ def test_every_mannequin_solid_stays_on_its_bone_in_any_pose_from_any_root(root)
     for (a, b), s in zip(sk.bone_frames, shapes):
         np.testing.assert_allclose(P[s.carrier] + R[s.carrier] @ s.start, P[a], atol=1e-12)
         np.testing.assert_allclose(P[s.carrier] + R[s.carrier] @ s.end, P[b], atol=1e-12)
+
+
+def test_undo_texts_name_joints_and_targets_in_words(doc):
+    ed = JointEditor(doc)
+    ed.select("right_shoulder")
+    ed.set_angle(next(d.index for d in ed.dofs() if d.axis == "y"), 0.2)
+    assert doc.history.undo_text == "Turn right shoulder (y)"
+    doc.rotate_target("left_hand", "z", 0.1)
+    assert doc.history.undo_text == "Rotate left hand about z"
+    doc.move_targets({"left_hand": [0.3, 0.2, 1.0], "head": [0.0, 0.0, 1.7]})
+    assert doc.history.undo_text == "Move left hand, head"
+    assert "_" not in " ".join(c.text for c in doc.history.commands)

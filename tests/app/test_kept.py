@@ -10,6 +10,7 @@ import gsik
 from gsik.anim.motion import Motion
 from gsik_studio.model import Document
 from gsik_studio.model.kept import kept_state
+from gsik_studio.model.timeline import TimelineState
 
 
 @pytest.fixture()
@@ -42,13 +43,15 @@ def test_add_move_delete_key_are_each_one_undo_step_and_undo_exactly(doc):
     keyed = dict(tl.keys)
     tl.move_key(20, 30)
     tl.delete_key(0)
-    assert texts(doc) == ["Add key at frame 0", "Move left_hand", "Add key at frame 20", "Move key 20 to 30",
+    assert texts(doc) == ["Add key at frame 0", "Move left hand", "Add key at frame 20", "Move key 20 to 30",
                           "Delete key at frame 0"]
     assert sorted(tl.keys) == [30]
     doc.undo()
     assert sorted(tl.keys) == [0, 30]
     doc.undo()
-    assert tl.keys == keyed and tl.motion.n_frames == 21  # the baked sequence follows the keys back
+    assert tl.keys == keyed  # the baked sequence follows the keys back: frame 20 is the key again
+    np.testing.assert_array_equal(tl.motion.q[20], np.clip(keyed[20].q(doc.skeleton), doc.skeleton.lower,
+                                                           doc.skeleton.upper))
     doc.undo()
     assert sorted(tl.keys) == [0]
     doc.redo()
@@ -68,15 +71,15 @@ def test_loading_and_discarding_a_clip_are_each_one_undo_step(doc):
     tl.end_scrub()
     tl.discard()
     assert texts(doc) == ["Import reach.bvh", "Scrub reach.bvh", "Discard reach.bvh"]
-    assert tl.clip is None and tl.n_frames == 1
+    assert tl.clip is None and tl.n_frames == TimelineState().length  # the keys' timeline again
     doc.undo()
-    assert tl.clip is m and tl.name == "reach.bvh" and tl.frame == 0
+    assert tl.clip is m and tl.name == "reach.bvh" and tl.frame == 5  # the frame scrubbed to stays
     assert shown[-1] == (m, 12)
     doc.undo()
     doc.undo()
     assert tl.clip is None and tl.name == "" and doc.pose() == doc.history.commands[0].before
     doc.redo()
-    assert tl.clip is m and tl.frame == 0
+    assert tl.clip is m and tl.frame == 5  # undo and redo keep the current frame
     tl.discard()
     tl.discard()  # nothing to discard: no step
     assert doc.history.undo_text == "Discard reach.bvh" and not doc.history.can_redo
@@ -163,8 +166,8 @@ def test_a_key_sequence_keeps_its_fps_and_length(doc, tmp_path):
     doc.timeline.add_key(4)
     doc.save(tmp_path / "k.yaml")
     text = (tmp_path / "k.yaml").read_text()
-    assert "  fps: 30.0\n  length: 5\n" in text
-    (tmp_path / "k.yaml").write_text(text.replace("  fps: 30.0\n  length: 5\n", "  fps: 12.0\n  length: 9\n"))
+    assert "  fps: 30.0\n  length: 90\n" in text
+    (tmp_path / "k.yaml").write_text(text.replace("  fps: 30.0\n  length: 90\n", "  fps: 12.0\n  length: 9\n"))
     doc.open(tmp_path / "k.yaml")
     tl = doc.timeline
     assert tl.frame_time == 1 / 12 and tl.n_frames == 9 and tl.motion.n_frames == 9
@@ -218,3 +221,21 @@ def test_a_hostile_pole_position_is_refused_and_changes_nothing(doc, position):
     with pytest.raises(gsik.GsikError):
         doc.controls.move_pole("left_knee", position)
     assert doc.controls.pole_snapshot() == poles and texts(doc) == ["Pole targets on"]
+
+
+def test_a_timeline_without_keys_keeps_its_length_and_fps_and_old_files_open_as_before(doc, tmp_path):
+    doc.save(tmp_path / "plain.yaml")
+    assert "keys:" not in (tmp_path / "plain.yaml").read_text()  # a new document's timeline: nothing to save
+    doc.timeline.set_length(150)
+    doc.timeline.set_fps(25)
+    doc.save(tmp_path / "long.yaml")
+    assert "keys:\n  fps: 25.0\n  length: 150\n  poses: []\n" in (tmp_path / "long.yaml").read_text()
+    other = Document()
+    other.open(tmp_path / "long.yaml")
+    assert (other.timeline.n_frames, other.timeline.frame_time, other.timeline.keys) == (150, 1 / 25, {})
+    other.open(tmp_path / "plain.yaml")  # a file without a keys block: a new document's timeline
+    assert (other.timeline.n_frames, other.timeline.key_fps) == (Document().timeline.n_frames, 30.0)
+    old = tmp_path / "old.yaml"  # keys written before timelines had their own length: up to the last key
+    old.write_text((tmp_path / "long.yaml").read_text().replace("  length: 150\n", ""))
+    other.open(old)
+    assert other.timeline.n_frames == 1 and other.timeline.key_fps == 25.0

@@ -60,7 +60,7 @@ def test_drag_moves_the_target_and_the_solver_follows(doc):
         doc.move_target(name, start + k / 10 * (goal - start), drag=1)
     doc.end_drag()
     np.testing.assert_array_equal(doc.targets[name].position, goal)
-    assert len(doc.history.commands) == 1 and doc.history.undo_text == f"Move {name}"
+    assert len(doc.history.commands) == 1 and doc.history.undo_text == "Move left hand"
     assert doc.dirty and doc.needs_solving
     settle(doc)
     reached = doc.effector_poses()[name][:3, 3]
@@ -338,7 +338,7 @@ def test_an_edit_during_playback_stops_it_and_both_are_undoable(doc):
         assert pb.advance()
     doc.set_root("left_foot")  # the played effector becomes the root
     assert pb.finished and not pb.advance()
-    assert [c.text for c in doc.history.commands] == ["Lift", "Root on left_foot"]
+    assert [c.text for c in doc.history.commands] == ["Lift", "Root on left foot"]
     # A playback whose effector is now the root skips it instead of failing.
     pb2 = doc.playback(frames, "Lift again")
     while pb2.advance():

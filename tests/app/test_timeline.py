@@ -11,6 +11,7 @@ import gsik
 from gsik.anim.motion import Motion
 from gsik_studio.model import Document
 from gsik_studio.model.keys import interpolated_targets, slerp
+from gsik_studio.model.timeline import DEFAULT_LENGTH
 from gsik.io.urdf_skeleton import skeleton_from_urdf
 from gsik.rotations import matrix_from_axis_angle, quaternion_from_matrix
 
@@ -129,7 +130,7 @@ def test_an_edit_while_playing_stops_the_clock(doc, clock):
     doc.set_root("left_foot")
     clock.t += 4 / 30
     assert not tl.tick() and not tl.playing and tl.frame == 4
-    assert [c.text for c in doc.history.commands] == ["Load Reach", "Reach", "Root on left_foot"]
+    assert [c.text for c in doc.history.commands] == ["Load Reach", "Reach", "Root on left foot"]
 
 
 def test_a_motion_of_another_skeleton_is_refused(doc):
@@ -157,11 +158,11 @@ def test_keys_interpolate_targets_and_key_frames_are_exact(doc, clock):
         doc.step()
     tl.add_key(20)
     end = doc.pose()
-    assert tl.n_frames == 21
+    assert tl.n_frames == DEFAULT_LENGTH  # a new document's timeline: keys anywhere on it
     mid = interpolated_targets(start, end, 0.5)["left_hand"].position
     np.testing.assert_allclose(mid, hand + [0.0, 0.125, 0.15], atol=1e-12)
     m = tl.motion
-    assert m.n_frames == 21
+    assert m.n_frames == DEFAULT_LENGTH
     np.testing.assert_array_equal(m.q[0], start.q(doc.skeleton))
     np.testing.assert_array_equal(m.q[20], end.q(doc.skeleton))
     tl.scrub(10)
@@ -170,8 +171,11 @@ def test_keys_interpolate_targets_and_key_frames_are_exact(doc, clock):
     # Move and delete keys.
     tl.end_scrub()
     tl.move_key(20, 30)
-    assert sorted(tl.keys) == [0, 30] and tl.motion.n_frames == 31
-    tl.delete_key(30)
+    assert sorted(tl.keys) == [0, 30] and tl.motion.n_frames == DEFAULT_LENGTH
+    np.testing.assert_array_equal(tl.motion.q[-1], tl.motion.q[30])  # frames after the last key hold it
+    tl.move_key(30, 120)  # a key past the end makes the timeline longer
+    assert tl.n_frames == 121 and tl.key_length == 121
+    tl.delete_key(120)
     assert sorted(tl.keys) == [0]
     with pytest.raises(gsik.GsikError, match="no key at frame 7"):
         tl.delete_key(7)
@@ -189,7 +193,48 @@ def test_a_new_document_starts_with_an_empty_timeline(doc):
     doc.timeline.add_key(0)
     doc.timeline.add_key(8)
     doc.new()
-    assert doc.timeline.keys == {} and doc.timeline.clip is None and doc.timeline.n_frames == 1
+    assert doc.timeline.keys == {} and doc.timeline.clip is None and doc.timeline.n_frames == DEFAULT_LENGTH
     doc.timeline.load(elbow_motion(doc), "Reach")
     doc.new()
     assert doc.timeline.clip is None and doc.timeline.motion is None
+
+
+def test_with_no_clip_the_timeline_has_a_length_and_fps_to_key_and_step_anywhere(doc):
+    tl = doc.timeline
+    assert (tl.n_frames, tl.frame_time, tl.motion) == (DEFAULT_LENGTH, 1 / 30, None)
+    tl.scrub(45)  # nothing to show yet: only the current frame moves
+    assert tl.frame == 45 and not doc.history.commands
+    assert tl.add_key() == 45
+    tl.step_frame(-5)
+    assert tl.frame == 40
+    tl.step_frame(10_000)
+    assert tl.frame == DEFAULT_LENGTH - 1
+    tl.jump_to_key(-1)
+    assert tl.frame == 45
+    tl.jump_to_key(-1)  # no key before: stays
+    assert tl.frame == 45
+    tl.set_length(240)
+    tl.set_fps(24)
+    assert tl.n_frames == 240 and tl.frame_time == 1 / 24 and tl.motion.n_frames == 240
+    assert doc.history.undo_text == "Set timeline to 24 fps"
+    with pytest.raises(gsik.GsikError, match=r"timeline's length \(a key is at frame 45\) must be a whole number >= 46"):
+        tl.set_length(30)
+    for bad in (0.0, -1.0, float("nan"), 5000.0):
+        with pytest.raises(gsik.GsikError, match="frames per second"):
+            tl.set_fps(bad)
+    assert (tl.n_frames, tl.key_fps) == (240, 24)
+    doc.undo()
+    doc.undo()
+    assert (tl.n_frames, tl.key_fps, sorted(tl.keys)) == (DEFAULT_LENGTH, 30, [45])
+
+
+def test_discarding_a_clip_gives_back_the_keys_timeline(doc):
+    tl = doc.timeline
+    tl.set_length(60)
+    tl.add_key(12)
+    tl.load(elbow_motion(doc), "Reach")
+    assert tl.n_frames == 30 and tl.keys  # the clip plays; the keys wait under it
+    tl.scrub(20)
+    tl.end_scrub()
+    tl.discard()
+    assert tl.clip is None and tl.n_frames == 60 and sorted(tl.keys) == [12] and tl.frame == 20

@@ -51,7 +51,7 @@ def test_clicking_the_slider_scrubs_and_play_button_plays_on(qtbot, window):
     qtbot.mouseClick(bar.buttons["stop"], Qt.LeftButton)
     assert not tl.playing and tl.frame == 0
     qtbot.mouseClick(bar.buttons["discard"], Qt.LeftButton)
-    assert tl.clip is None and bar.slider.maximum() == 0
+    assert tl.clip is None and bar.slider.maximum() == tl.key_length - 1  # the keys' timeline again
 
 
 def test_keys_from_the_bar_play_interpolated_and_move_by_dragging_their_mark(qtbot, window):
@@ -60,19 +60,20 @@ def test_keys_from_the_bar_play_interpolated_and_move_by_dragging_their_mark(qtb
     bar, doc, tl = window.timeline_bar, window.doc, window.doc.timeline
     qtbot.mouseClick(bar.buttons["key"], Qt.LeftButton)  # key 0: standing
     hand = np.array(doc.targets["left_hand"].position)
-    tl.frame = 30  # the slider's range ends at the last key: put the next key past it
+    _click_slider(qtbot, bar.slider, 30)
     doc.move_target("left_hand", hand + [0.0, 0.3, 0.35])
     window.settle()
     qtbot.mouseClick(bar.buttons["key"], Qt.LeftButton)
-    assert sorted(tl.keys) == [0, 30] and bar.slider.maximum() == 30 and bar.slider.keys == [0, 30]
+    second = tl.frame
+    assert abs(second - 30) <= 1 and sorted(tl.keys) == [0, second] and bar.slider.keys == [0, second]
     _click_slider(qtbot, bar.slider, 15)
     got = doc.effector_poses()["left_hand"][:3, 3]
     want = hand + [0.0, 0.15, 0.175]  # half way (smoothstep of 0.5 is 0.5)
     assert abs(tl.frame - 15) <= 1
     assert np.linalg.norm(got - want) < 0.03
-    # Drag the second key's mark (lower half of the slider) from 30 to 20.
-    _drag_slider(qtbot, bar.slider, 30, 20, bar.slider.height() - 7)
-    assert sorted(tl.keys) == [0, 20] or sorted(tl.keys) == [0, 21]
+    # Drag the second key's mark (lower half of the slider) to 20.
+    _drag_slider(qtbot, bar.slider, second, 20, bar.slider.height() - 7)
+    assert len(tl.keys) == 2 and min(tl.keys) == 0 and abs(max(tl.keys) - 20) <= 1
     last = max(tl.keys)
     _click_slider(qtbot, bar.slider, last)
     assert tl.frame == last
@@ -98,3 +99,60 @@ def test_timeline_screenshot(qtbot, window, tmp_path):
     bar = window.timeline_bar
     top_left = bar.mapTo(window, bar.rect().topLeft())
     assert img.height() >= top_left.y() + bar.height() > img.height() - 200  # the bar sits at the bottom
+
+
+def _type_into(qtbot, spin, text):
+    """Click into a spin box, replace its text by typing, press Return (real mouse and key events)."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    qtbot.mouseClick(spin.lineEdit(), Qt.LeftButton)
+    QTest.keyClick(spin.lineEdit(), Qt.Key_A, Qt.ControlModifier)
+    QTest.keyClicks(spin.lineEdit(), text)
+    QTest.keyClick(spin.lineEdit(), Qt.Key_Return)
+
+
+def test_with_no_clip_keys_go_anywhere_on_a_timeline_of_typed_length_stepped_by_keys_and_buttons(
+        qtbot, window, tmp_path):
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    bar, doc, tl = window.timeline_bar, window.doc, window.doc.timeline
+    assert bar.slider.maximum() == tl.n_frames - 1 > 0 and bar.length.isEnabled()
+    _type_into(qtbot, bar.length, "120")
+    _type_into(qtbot, bar.fps, "24")
+    assert (tl.n_frames, tl.frame_time, bar.slider.maximum()) == (120, 1 / 24, 119)
+    _click_slider(qtbot, bar.slider, 10)
+    qtbot.mouseClick(bar.buttons["key"], Qt.LeftButton)
+    assert sorted(tl.keys) == [tl.frame] and abs(tl.frame - 10) <= 1
+    first = tl.frame
+    hand = np.array(doc.targets["left_hand"].position)
+    _click_slider(qtbot, bar.slider, 60)
+    doc.move_target("left_hand", hand + [0.0, 0.3, 0.35])
+    window.settle()
+    window.plotter.setFocus()  # the pointer over the 3D view gives it the keyboard
+    QTest.keyClick(window.plotter, Qt.Key_K)  # key the pose here
+    second = tl.frame
+    assert sorted(tl.keys) == [first, second] and bar.slider.keys == [first, second]
+    for key, modifier, want in ((Qt.Key_Right, Qt.NoModifier, second + 1), (Qt.Key_Left, Qt.NoModifier, second),
+                                (Qt.Key_Left, Qt.ShiftModifier, first), (Qt.Key_Right, Qt.ShiftModifier, second)):
+        QTest.keyClick(window.plotter, key, modifier)
+        assert tl.frame == want and bar.slider.value() == want
+    qtbot.mouseClick(bar.buttons["previous_key"], Qt.LeftButton)
+    for _ in range(3):
+        qtbot.mouseClick(bar.buttons["next_frame"], Qt.LeftButton)
+    assert tl.frame == first + 3
+    # Scrubbing between the keys shows the solved in-between poses: the hand half way at the middle frame.
+    middle = (first + second) // 2
+    _click_slider(qtbot, bar.slider, middle)
+    assert tl.frame == middle
+    s = (middle - first) / (second - first)
+    want = hand + (3 - 2 * s) * s * s * np.array([0.0, 0.3, 0.35])  # eased (smoothstep)
+    assert np.linalg.norm(doc.effector_poses()["left_hand"][:3, 3] - want) < 0.03
+    window.save_screenshot(str(tmp_path / "keys.png"))
+    # A clip on the timeline has its own frames; discarding it gives back the keys' timeline.
+    window.play_walk(n_steps=1)
+    window.stop_playback()
+    assert not bar.length.isEnabled() and tl.n_frames != 120
+    qtbot.mouseClick(bar.buttons["discard"], Qt.LeftButton)
+    assert (tl.n_frames, bar.slider.maximum(), bar.slider.keys, bar.length.value()) == (120, 119, [first, second], 120)

@@ -58,7 +58,7 @@ def test_keyed_sequence_exports_every_frame(qtbot, window, tmp_path):
     qtbot.mouseClick(bar.buttons["key"], Qt.LeftButton)
     path = str(tmp_path / "keys.bvh")
     assert window.files.export_bvh_path(path)
-    assert read_bvh(path).n_frames == 13
+    assert read_bvh(path).n_frames == doc.timeline.n_frames == 90  # the keys' whole timeline
 
 
 def _dialog_returns(monkeypatch, path):
@@ -164,3 +164,83 @@ def test_bad_skeleton_error_is_a_gsik_error():
 
     with pytest.raises(gsik.GsikError):
         transfer.read_skeleton(os.path.join(DATA, "walk_zxy.bvh"))  # not YAML
+
+
+def test_open_after_import_skeleton_opens_the_pose_on_its_own_skeleton_and_a_bad_file_changes_nothing(
+        qtbot, window, boxes, monkeypatch, tmp_path):
+    from PySide6.QtCore import Qt
+    from PySide6.QtWidgets import QMessageBox
+
+    biped_pose = tmp_path / "biped pose.yaml"
+    window.doc.random_pose(seed=3)
+    assert window.save_to(str(biped_pose))
+    want = window.doc.pose()
+    assert window.windowTitle().startswith("biped pose.yaml") and "biped" in window.windowTitle()
+    _dialog_returns(monkeypatch, os.path.join(DATA, "humanoid.urdf"))
+    window.act_import_skeleton.trigger()
+    mini = window.doc
+    assert mini.skeleton.name == "mini_humanoid" and "mini_humanoid" in window.windowTitle()
+    name = sorted(mini.targets)[0]
+    mini.move_target(name, np.array(mini.targets[name].position) + [0.0, 0.0, -0.05])  # unsaved
+    before = mini.pose()
+    text = biped_pose.read_text()
+    assert "root: right_foot" in text
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text.replace("root: right_foot", "root: tail", 1))  # a biped pose with an unknown root
+    boxes["answer"] = QMessageBox.Discard
+    _dialog_returns(monkeypatch, str(bad))
+    qtbot.keyClick(window, Qt.Key_O, Qt.ControlModifier)  # File → Open
+    assert len(boxes["question"]) == 1 and "open another pose" in boxes["question"][0][1]
+    assert len(boxes["critical"]) == 1 and "tail" in boxes["critical"][0][1]
+    assert window.doc is mini and mini.pose() == before and mini.dirty and _shows_skeleton(window, mini.skeleton)
+    _dialog_returns(monkeypatch, str(biped_pose))
+    qtbot.keyClick(window, Qt.Key_O, Qt.ControlModifier)
+    assert len(boxes["question"]) == 2 and len(boxes["critical"]) == 1
+    doc = window.doc
+    assert doc is not mini and doc.skeleton.name == "biped" and _shows_skeleton(window, doc.skeleton)
+    assert (doc.targets, doc.root) == (want.targets, want.root) and doc.path == str(biped_pose)  # the file's pose
+    assert window.windowTitle() == "biped pose.yaml[*] — biped — gsik studio"
+    window.save_screenshot(str(tmp_path / "opened.png"))
+
+
+def test_a_pose_of_a_skeleton_that_is_neither_shown_nor_bundled_says_to_import_it(window, boxes, tmp_path):
+    from gsik_studio.model import transfer
+
+    path = tmp_path / "mini.yaml"
+    mini = transfer.document_for(transfer.read_skeleton(os.path.join(DATA, "humanoid.urdf")))
+    mini.save(str(path))
+    biped = window.doc
+    assert not window.open_path(str(path))
+    assert len(boxes["critical"]) == 1 and "import that skeleton first" in boxes["critical"][0][1]
+    assert window.doc is biped
+
+
+def test_export_bvh_asks_the_up_axis_and_units_defaulting_to_what_blender_expects(qtbot, window, monkeypatch,
+                                                                                   tmp_path):
+    from PySide6 import QtCore, QtWidgets
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    from gsik_studio.widgets.export_options import ExportOptionsDialog
+
+    monkeypatch.setattr(QtWidgets.QFileDialog, "getSaveFileName",
+                        staticmethod(lambda *a, **k: (str(tmp_path / "out.bvh"), "")))
+    seen = []
+
+    def choose_z_up():
+        dialog = QtWidgets.QApplication.activeModalWidget()
+        if not isinstance(dialog, ExportOptionsDialog):
+            return  # not shown yet: the poll comes back
+        poll.stop()
+        seen.append(dialog.options())
+        dialog.up.setFocus()
+        QTest.keyClick(dialog.up, Qt.Key_Down)  # y up -> z up, by the keyboard
+        QTest.keyClick(dialog, Qt.Key_Return)  # OK
+
+    poll = QtCore.QTimer(window)
+    poll.timeout.connect(choose_z_up)
+    poll.start(50)
+    window.act_export_bvh.trigger()  # the dialog runs its own event loop until the poll answers it
+    assert seen == [("y", "cm")]  # Blender's default import: y up, centimetres
+    assert (tmp_path / "out.bvh").is_file() and "(z up, cm)" in window.statusBar().currentMessage()
+    assert window.settings.value("export/up") == "z"  # remembered for the next export

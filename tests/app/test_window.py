@@ -71,7 +71,7 @@ def test_dragging_a_target_gizmo_moves_it_and_the_effector_follows(qtbot, window
     _drag(window, start_target, (60, 70))
     moved = np.array(doc.targets[name].position)
     assert np.linalg.norm(moved - start_target) > 0.05, "the drag did not move the target"
-    assert doc.history.undo_text == f"Move {name}" and len(doc.history.commands) == 1
+    assert doc.history.undo_text == f"Move {name.replace('_', ' ')}" and len(doc.history.commands) == 1
     assert window.viewport.selected == name
     # The frame timer runs the solver: after a few ticks the hand has moved toward the target.
     _ticks(qtbot, window, lambda: np.linalg.norm(_effector(window, name) - moved)

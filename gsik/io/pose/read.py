@@ -132,12 +132,12 @@ class PoseDocument(NamedTuple):
         name = self.data.get("skeleton") if isinstance(self.data, dict) else None
         if not isinstance(name, str) or not name:
             return None
-        if _names_a_file(name) and not os.path.isabs(name) and not self.source.startswith("<"):
+        if names_a_skeleton_file(name) and not os.path.isabs(name) and not self.source.startswith("<"):
             return os.path.join(os.path.dirname(self.source), name)
         return name
 
 
-def _names_a_file(name: str) -> bool:
+def names_a_skeleton_file(name: str) -> bool:
     """True if a pose's ``skeleton:`` field is a path to a skeleton file rather than a skeleton's name."""
     return os.path.splitext(name)[1].lower() in SKELETON_FILE_SUFFIXES or "/" in name or os.sep in name
 
@@ -226,7 +226,7 @@ def _check_header(r: _Reader, top: dict, skeleton: Skeleton) -> None:
         newer = " (written by a newer gsik?)" if fmt > POSE_FORMAT else ""
         r.fail(("format",), f"unsupported pose format {fmt}{newer}; this gsik reads format {POSE_FORMAT}")
     name = r.name(top["skeleton"], ("skeleton",))
-    if name != skeleton.name and not _names_a_file(name):
+    if name != skeleton.name and not names_a_skeleton_file(name):
         r.fail(("skeleton",), f"pose is for skeleton {_show(name)}, but the skeleton is {_show(skeleton.name)}")
 
 
