@@ -29,7 +29,14 @@ def run_export(parent: QtWidgets.QWidget, job: BvhExport) -> bool:
     dialog.setAutoReset(False)
     loop, errors = QtCore.QEventLoop(), []
 
+    def cancel() -> None:
+        job.cancel()
+        loop.quit()
+
     def turn() -> None:
+        if dialog.wasCanceled():  # closed or cancelled without the button's signal
+            cancel()
+            return
         try:
             written = job.step(CHUNK_FRAMES)
         except Exception as exc:  # re-raised below, outside Qt's slot
@@ -39,10 +46,6 @@ def run_export(parent: QtWidgets.QWidget, job: BvhExport) -> bool:
         dialog.setLabelText(f"Baking the keys for export: frame {job.baked:,} of {job.n_frames:,}")
         if written:
             loop.quit()
-
-    def cancel() -> None:
-        job.cancel()
-        loop.quit()
 
     timer = QtCore.QTimer(dialog)
     timer.timeout.connect(turn)
