@@ -25,8 +25,8 @@ from gsik.io.pose import Pose
 from gsik_studio.model.keys import KEY_STEPS, _Baker, interpolated_targets
 
 #: A frame asked for at most this many frames past those baked is baked up to (exact, kept); further on it is
-#: previewed (about 0.05 s of solving unloaded at most per frame asked).
-BAKE_AHEAD = 120
+#: previewed (about 15 ms of solving unloaded at most per frame asked).
+BAKE_AHEAD = 32
 
 #: Solver steps of a previewed frame per step of a baked one (it starts further from its answer).
 PREVIEW_STEPS = 4
