@@ -42,13 +42,13 @@ def _screenshot(app, args, size: tuple[int, int]) -> int:
     from PySide6 import QtCore
 
     import gsik
-    from gsik_studio.model import Document
+    from gsik_studio.model import Document, transfer
     from gsik_studio.window import MainWindow
 
     doc = Document()
     if args.pose:
         try:
-            warnings = doc.open(args.pose)
+            doc, warnings = transfer.open_pose(args.pose, doc)  # on the skeleton the file names
         except gsik.GsikError as exc:
             print(f"gsik-studio: {exc}", file=sys.stderr)
             return 1

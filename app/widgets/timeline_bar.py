@@ -40,7 +40,7 @@ class FrameSlider(QtWidgets.QSlider):
         self.keys: list[int] = []
         self._dragging_key: int | None = None
         self.setMinimumHeight(34)
-        self.setMinimumWidth(300)
+        self.setMinimumWidth(150)  # the bar fits a 900 px wide window beside its transport and fields
 
     def x_of(self, frame: int) -> int:
         """Widget x [px] of a frame's position on the groove."""
