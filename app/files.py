@@ -9,6 +9,7 @@ from PySide6 import QtCore, QtWidgets
 
 import gsik
 from gsik_studio.model import Document, characters, transfer
+from gsik_studio.progress import run_export
 
 POSE_FILTER = "gsik poses (*.yaml *.yml);;All files (*)"
 BVH_FILTER = "BVH motion (*.bvh);;All files (*)"
@@ -242,12 +243,15 @@ class FileActions:
     def export_bvh_path(self, path: str, options: transfer.BvhExportOptions = transfer.BvhExportOptions()) -> bool:
         """Write the clip, else the key sequence, else the pose as BVH; False, saying why, on error."""
         self._stop_playback()
+        job = transfer.BvhExport(self.doc, path, options)
         try:
-            what = transfer.export_bvh(self.doc, path, options)
+            if not run_export(self.parent, job):  # keys are baked in chunks under a progress dialog
+                self._message(f"Export cancelled: nothing was written to {path}", 6000)
+                return False
         except gsik.GsikError as exc:
             return self._failed(f"Could not export: {exc}", "Could not export BVH",
                                 f"Nothing was written (any existing file is unchanged).\n\n{exc}")
-        self._message(f"Exported the {what} to {path} ({options.up} up, {options.units})", 6000)
+        self._message(f"Exported the {job.what} to {path} ({options.up} up, {options.units})", 6000)
         return True
 
     def _failed(self, status: str, title: str, text: str) -> bool:

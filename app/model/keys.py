@@ -3,7 +3,8 @@
 A key sequence is ``{frame: Pose}``. Frames between two keys are solved from
 targets interpolated between the keys' targets (positions with a smoothstep
 ease, orientations by slerp), each frame warm-started from the one before, so
-the sequence plays and exports as an ordinary :class:`gsik.anim.motion.Motion`.
+the sequence plays and exports as an ordinary :class:`gsik.anim.motion.Motion`
+(baked in chunks: :class:`gsik_studio.model.bake.KeyedBake`).
 Scenarios' target frames are baked the same way (one solver step per frame,
 as they played live before).
 """
@@ -16,7 +17,6 @@ import numpy as np
 
 import gsik
 from gsik.anim.motion import Motion
-from gsik.errors import GsikError
 from gsik.io.pose import Pose
 from gsik.targets import Target
 from gsik_studio.model.poses import driven_target
@@ -107,36 +107,5 @@ def bake_target_frames(skeleton: gsik.Skeleton, settings: gsik.SolverSettings, s
     baker.record()
     for frame in frames:
         baker.drive(frame, steps)
-        baker.record()
-    return baker.motion(frame_time)
-
-
-def bake_keys(skeleton: gsik.Skeleton, settings: gsik.SolverSettings, keys: Mapping[int, Pose],
-              frame_time: float, steps: int = KEY_STEPS, n_frames: int = 0) -> Motion:
-    """The key sequence as a motion of ``max(keys) + 1`` frames, or ``n_frames`` when that is more.
-
-    Frames before the first key hold it, frames after the last key hold that;
-    a key frame shows its pose exactly; a frame between keys is solved from
-    :func:`interpolated_targets`, warm-started from the frame before (root and
-    placement of the earlier key).
-
-    Raises:
-        GsikError: no keys.
-    """
-    if not keys:
-        raise GsikError("no keyed poses to bake: add a key first")
-    frames = sorted(keys)
-    baker = _Baker(skeleton, settings, keys[frames[0]])
-    placed = frames[0]  # the key the scratch solver holds exactly, if any: a held frame needs no solver work
-    for i in range(max(frames[-1] + 1, n_frames)):
-        k = int(np.searchsorted(frames, i, side="right")) - 1  # the last key at or before i
-        if k < 0 or frames[k] == i or k == len(frames) - 1:
-            if frames[max(k, 0)] != placed:
-                placed = frames[max(k, 0)]
-                baker.place(keys[placed])
-        else:
-            placed = None
-            a, b = frames[k], frames[k + 1]
-            baker.drive(interpolated_targets(keys[a], keys[b], (i - a) / (b - a)), steps)
         baker.record()
     return baker.motion(frame_time)

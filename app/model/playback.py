@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import gsik
 from gsik.anim.motion import Motion
+from gsik_studio.model.bake import KeyedBake, motion_frame
 
 if TYPE_CHECKING:
     from gsik_studio.model.document import Document
@@ -15,9 +16,10 @@ if TYPE_CHECKING:
 class Playback:
     """Plays frames onto a document through its public methods, then records the result as one undo step.
 
-    A frame is either a frame of a :class:`gsik.anim.motion.Motion` (angles, root
-    and root transform shown directly) or a dict of targets (shown, then the
-    solver steps). Call :meth:`advance` once per frame (the frame loop does it
+    A frame is either a frame of a :class:`gsik.anim.motion.Motion` or of a
+    :class:`gsik_studio.model.bake.KeyedBake` (angles, root and root transform
+    shown directly; a bake solves the frame when asked) or a dict of targets
+    (shown, then the solver steps). Call :meth:`advance` once per frame (the frame loop does it
     every :attr:`frame_time` seconds) until it returns False, or :meth:`stop`
     to end early; the played result is then one command (``text``) that undo
     takes back to :attr:`before`, the pose before playing.
@@ -26,10 +28,10 @@ class Playback:
     def __init__(self, doc: Document, frames, text: str, frame_time: float):
         self.doc = doc
         self.text = text
-        if isinstance(frames, Motion):
+        if isinstance(frames, (Motion, KeyedBake)):
             if frames.skeleton.name != doc.skeleton.name:
                 raise gsik.GsikError(f"motion is for skeleton {frames.skeleton.name!r}, not {doc.skeleton.name!r}")
-            self.motion: Motion | None = frames
+            self.motion: Motion | KeyedBake | None = frames
             self.target_frames: Sequence = ()
             self.n_frames = frames.n_frames
             self.frame_time = float(frames.frame_time)  # [s]
@@ -56,7 +58,7 @@ class Playback:
         """Show frame ``i`` (0 <= i < :attr:`n_frames`); the next :meth:`advance` shows ``i + 1``."""
         if self.motion is not None:
             m = self.motion
-            self.doc.show_motion_frame(m.roots[i], m.world_from_root[i], m.q[i])
+            self.doc.show_motion_frame(*(m.frame(i) if isinstance(m, KeyedBake) else motion_frame(m, i)))
         else:
             self.doc.drive_targets(self.target_frames[i])
         self.index = i + 1

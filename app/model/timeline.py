@@ -4,6 +4,9 @@ Plain Python. The frame shown while playing is chosen from the clock
 (``frame = start_frame + elapsed / frame_time``), so a slow machine drops
 frames instead of slowing the motion down. The clip stays on the timeline
 after it played (scrub it, play it again) until :meth:`Timeline.discard`.
+Keys are baked in chunks (:class:`gsik_studio.model.bake.KeyedBake`): each
+play tick bakes :data:`BAKE_FRAMES_PER_TICK` frames, and a frame shown before
+it is baked is solved on its own, so Play never blocks for long.
 
 Every stretch of frames shown (one play until pause or stop, one scrub) is a
 :class:`gsik_studio.model.playback.Playback` of the document: an edit, undo or
@@ -25,7 +28,8 @@ from gsik.io.pose.sequence import MAX_SEQUENCE_FRAMES
 from gsik.io.pose import Pose
 from gsik.targets import Target
 from gsik_studio.model.events import Signal
-from gsik_studio.model.keys import bake_keys, bake_target_frames
+from gsik_studio.model.bake import KeyedBake
+from gsik_studio.model.keys import bake_target_frames
 
 if TYPE_CHECKING:
     from gsik_studio.model.document import Document
@@ -33,6 +37,10 @@ if TYPE_CHECKING:
 
 #: Frame time of keyed sequences [s] (30 frames per second), unless a file says otherwise.
 KEY_FRAME_TIME = 1 / 30
+
+#: Frames of the keys baked per play tick (about 4 ms of solving unloaded): Play never solves the whole sequence in
+#: one go, yet the bake runs ahead of the clock whenever a tick shows fewer than 8 new frames.
+BAKE_FRAMES_PER_TICK = 8
 
 #: Frames of a new document's timeline (3 s at 30 fps): room to key poses before any clip is loaded.
 DEFAULT_LENGTH = 90
@@ -101,20 +109,30 @@ class Timeline:
         self.frame = 0
         self.playing = False
         self.loop = False
-        self._baked: Motion | None = None  # the keys as a motion, until they change
+        self._bake: KeyedBake | None = None  # the keys baked so far, until they change
         self._session: Playback | None = None
         self._start = (0.0, 0)  # (clock, frame) when playing started
 
     # -- content ------------------------------------------------------------------------
     @property
+    def bake(self) -> KeyedBake | None:
+        """The keys' bake (frames solved so far kept until the keys, length or fps change); None without keys."""
+        if self.keys and self._bake is None:
+            self._bake = KeyedBake(self.doc.skeleton, self.doc.settings, self.keys, 1 / self.key_fps,
+                                   n_frames=self.key_length)
+        return self._bake if self.keys else None
+
+    @property
+    def source(self) -> Motion | KeyedBake | None:
+        """What plays: the clip, else the keys' bake (frames solved as shown), else None."""
+        return self.clip if self.clip is not None else self.bake
+
+    @property
     def motion(self) -> Motion | None:
-        """What plays: the clip, else the keys baked into a motion, else None."""
-        if self.clip is not None:
-            return self.clip
-        if self.keys and self._baked is None:
-            self._baked = bake_keys(self.doc.skeleton, self.doc.settings, self.keys, 1 / self.key_fps,
-                                    n_frames=self.key_length)
-        return self._baked
+        """The clip, else the keys as a motion (baking every frame left in one go: the window steps
+        :attr:`bake` in chunks first), else None."""
+        source = self.source
+        return source.finish() if isinstance(source, KeyedBake) else source
 
     @property
     def n_frames(self) -> int:
@@ -160,7 +178,7 @@ class Timeline:
         """Take ``state`` (not playing), and the current ``frame`` if given (kept on the timeline)."""
         self.pause()
         if (tuple(sorted(self.keys.items())), self.key_length, self.key_fps) != (state.keys, state.length, state.fps):
-            self._baked = None
+            self._bake = None
         self.clip, self.name, self.keys = state.clip, state.name, dict(state.keys)
         self.key_fps, self.key_length = state.fps, state.length
         self.frame = min(self.frame if frame is None else frame, self.n_frames - 1)
@@ -240,7 +258,7 @@ class Timeline:
     # -- transport ------------------------------------------------------------------------
     def _open_session(self, text: str) -> Playback | None:
         """The playback that shows frames (a new one if none runs); None when there is nothing to play."""
-        m = self.motion
+        m = self.source
         if m is None:
             return None
         if self._session is None or self._session.finished:
@@ -261,7 +279,7 @@ class Timeline:
         """Start playing from the current frame (from 0 when at the end); False when there is nothing to play."""
         if self.playing:
             return True
-        if self.motion is None:
+        if self.source is None:
             return False
         if self.frame >= self.n_frames - 1:
             self.frame = 0
@@ -320,6 +338,8 @@ class Timeline:
             self._session = None
             self.pause()
             return False
+        if self.clip is None and self.bake is not None:
+            self.bake.step(BAKE_FRAMES_PER_TICK)
         f = self.frame_now()
         if f >= self.n_frames:
             self._show(self.n_frames - 1)  # the last frame stays: no snapping back

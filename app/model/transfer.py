@@ -176,6 +176,58 @@ def export_bvh(doc: Document, path: str | os.PathLike, options: BvhExportOptions
     return what
 
 
+class BvhExport:
+    """One Export BVH stepped in chunks, so that a window never blocks for long: a key sequence is baked
+    ``budget_frames`` at a time, and the file is written (atomically, :func:`export_bvh`) only by the step that
+    finishes. A cancelled export writes nothing (the frames baked so far stay in the timeline's bake).
+
+    Attributes:
+        bake: The keys' bake to finish first (None for a clip or a pose: one step writes).
+        what: What was written ("clip", "keys" or "pose"), once :attr:`finished`.
+    """
+
+    def __init__(self, doc: Document, path: str | os.PathLike, options: BvhExportOptions = BvhExportOptions()):
+        self.doc, self.path, self.options = doc, path, options
+        tl = doc.timeline
+        self.bake = tl.bake if tl.clip is None else None
+        self.what: str | None = None
+        self.finished = self.cancelled = False
+
+    @property
+    def n_frames(self) -> int:
+        """Frames to bake in all (0 when there is nothing to bake)."""
+        return self.bake.n_frames if self.bake is not None else 0
+
+    @property
+    def baked(self) -> int:
+        """Frames baked so far."""
+        return self.bake.solved if self.bake is not None else 0
+
+    @property
+    def ready(self) -> bool:
+        """True when the next :meth:`step` writes the file (nothing left to bake)."""
+        return self.bake is None or self.bake.done
+
+    def step(self, budget_frames: int) -> bool:
+        """Bake up to ``budget_frames`` frames, or write the file when none are left; True once written.
+
+        Raises:
+            GsikError: cancelled already, or the file could not be written (nothing was).
+        """
+        if self.cancelled:
+            raise gsik.GsikError(f"the export to {os.fspath(self.path)} was cancelled")
+        if not self.finished and not self.ready:
+            self.bake.step(budget_frames)
+        elif not self.finished:
+            self.what = export_bvh(self.doc, self.path, self.options)
+            self.finished = True
+        return self.finished
+
+    def cancel(self) -> None:
+        """Give up: nothing is written."""
+        self.cancelled = True
+
+
 def describe(skeleton: gsik.Skeleton) -> str:
     """A short description of a skeleton for messages ("humanoid: 12 DOFs, effectors a, b")."""
     return f"{skeleton.name}: {skeleton.n_dofs} DOFs, effectors {', '.join(skeleton.effector_sites)}"
