@@ -261,13 +261,17 @@ def _with_direction(found: dict[str, str], anchor: dict, rest_points: np.ndarray
 
 
 def widened(skeleton: Skeleton, margin: float) -> Skeleton:
-    """``skeleton`` with the ranges of its ball joints (two or more DOFs) widened by ``margin`` each side [rad];
-    hinges (knees, elbows) keep theirs, so a straight limb never bends the wrong way."""
+    """``skeleton`` with the ranges of its ball joints (two or more DOFs) widened by ``margin`` each side [rad], but
+    never past +-pi: an angle beyond is a second copy of a pose the range already holds (a shoulder raised 210 deg is
+    one lowered 150 deg the other way), a branch a warm-started solve slides into and cannot leave (CMU 001_14's
+    arms overhead). Hinges (knees, elbows) keep theirs, so a straight limb never bends the wrong way."""
     ball = np.zeros(skeleton.n_dofs, dtype=bool)
     for dofs in skeleton.joint_dofs:
         if len(dofs) >= 2:
             ball[list(dofs)] = True
-    return replace(skeleton, lower=skeleton.lower - margin * ball, upper=skeleton.upper + margin * ball)
+    lower = np.minimum(skeleton.lower, np.maximum(skeleton.lower - margin * ball, -np.pi))
+    upper = np.maximum(skeleton.upper, np.minimum(skeleton.upper + margin * ball, np.pi))
+    return replace(skeleton, lower=lower, upper=upper)
 
 
 class Retargeter:
