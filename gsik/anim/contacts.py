@@ -15,6 +15,15 @@ position (the mean of its targets over the span) for the whole span, which
 the retargeting tracks at the top priority; the targets ease into and out of
 the pin over :attr:`ContactSettings.blend_seconds` either side.
 
+A contact is released where the clip's foot point, smoothed over the blend
+time, leaves its spot (where the contact began) by more than
+:attr:`ContactSettings.release_fraction` of the body's height, though still
+low and slow (a toe pivoting, a foot creeping through a long stance): the
+point is free for :attr:`ContactSettings.gap_seconds` and a new contact begins
+where it is then. So a pin never holds a point much farther than that from
+the clip (issue 17: CMU 002_08's left toe crept 5 cm through a 2.5 s stance
+and, held at one place, was 48 mm off), and a held foot still never slides.
+
 The slide (:func:`planted_speed`) is the p95 speed [m/s] of the foot points
 over the frames the clip has them planted.
 """
@@ -38,6 +47,8 @@ class ContactSettings:
         min_seconds: Shortest contact span kept [s].
         gap_seconds: Longest gap closed inside a contact [s].
         blend_seconds: Time over which targets ease into and out of a pin [s].
+        release_fraction: How far the smoothed point may leave its contact's spot before the contact is released,
+            in body heights (half the retarget check's 2% per joint).
     """
 
     height_fraction: float = 0.03
@@ -46,6 +57,7 @@ class ContactSettings:
     min_seconds: float = 0.1
     gap_seconds: float = 0.05
     blend_seconds: float = 0.1
+    release_fraction: float = 0.01
 
 
 class ContactSpan(NamedTuple):
@@ -107,6 +119,29 @@ def _spans(flags: np.ndarray, min_frames: int, gap_frames: int) -> list[tuple[in
     return [(a, b) for a, b in _runs(closed) if b - a >= min_frames]
 
 
+def smoothed(points: np.ndarray, half: int) -> np.ndarray:
+    """``points`` (n_frames, ...) averaged over ``half`` frames either side (fewer at the ends): the clip's path
+    without its frame-to-frame jitter."""
+    c = np.cumsum(np.concatenate([np.zeros((1,) + points.shape[1:]), points]), axis=0)
+    n = len(points)
+    hi = np.minimum(np.arange(n) + half + 1, n)
+    lo = np.maximum(np.arange(n) - half, 0)
+    return (c[hi] - c[lo]) / (hi - lo).reshape((n,) + (1,) * (points.ndim - 1))
+
+
+def _settled(path: np.ndarray, radius: float, gap: int, min_frames: int) -> list[tuple[int, int]]:
+    """``(start, stop)`` runs of ``path`` (n, 3) [m] that stay within ``radius`` [m] of where each began; after a
+    run ends, ``gap`` frames are left free; runs shorter than ``min_frames`` are dropped."""
+    runs, a, n = [], 0, len(path)
+    while a < n:
+        away = np.flatnonzero(np.linalg.norm(path[a:] - path[a], axis=-1) > radius)
+        b = a + int(away[0]) if len(away) else n
+        if b - a >= min_frames:
+            runs.append((a, b))
+        a = b + gap if len(away) else n
+    return runs
+
+
 def detect_contacts(points: np.ndarray, names: tuple[str, ...], fps: float, body_height: float, up: int = 2,
                     settings: ContactSettings = ContactSettings()) -> Contacts:
     """The contact spans of foot points ``points`` (n_frames, n_points, 3) [m], ``up`` the vertical axis index.
@@ -118,12 +153,15 @@ def detect_contacts(points: np.ndarray, names: tuple[str, ...], fps: float, body
     speed = point_speeds(points, fps, _frames(settings.speed_seconds / 2, fps))
     low_and_slow = (height < settings.height_fraction * body_height) & (speed < settings.speed_fraction * body_height)
     planted = np.zeros(low_and_slow.shape, dtype=bool)
+    smooth = smoothed(points, _frames(settings.blend_seconds, fps))
     spans = []
     for k in range(points.shape[1]):
         for a, b in _spans(low_and_slow[:, k], _frames(settings.min_seconds, fps), _frames(settings.gap_seconds,
                                                                                              fps)):
-            planted[a:b, k] = True
-            spans.append(ContactSpan(k, a, b))
+            for c, d in _settled(smooth[a:b, k], settings.release_fraction * body_height,
+                                 _frames(settings.gap_seconds, fps), _frames(settings.min_seconds, fps)):
+                planted[a + c:a + d, k] = True
+                spans.append(ContactSpan(k, a + c, a + d))
     return Contacts(tuple(names), planted, tuple(spans), float(fps))
 
 

@@ -23,7 +23,8 @@ Per frame:
    zero rotation means, points do not); shoulders last. A few prioritised
    steps from the previous frame's pose (warm start), with the rest pose as a
    light posture below everything, so directions no target fixes (a straight
-   arm's twist) stay natural.
+   arm's twist) stay natural. A frame the warm start leaves far from its
+   targets (:data:`COLD_START_FRACTION`) is solved again from the rest pose.
 
 5. Planted feet stay planted (:mod:`gsik.anim.contacts`): the clip's foot
    and toe contacts (low and slow) pin those targets to one world position
@@ -79,6 +80,10 @@ REQUIRED = ("left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "r
 STEPS_PER_FRAME = 12
 #: Steps for the first frame, which starts from the rest pose.
 FIRST_FRAME_STEPS = 60
+#: A warm-started frame whose worst mapped joint misses its target by more than this, in body heights, is solved
+#: again from the rest pose, and the closer of the two kept: arms wound into a twist the next frames cannot undo
+#: (001_14's arms overhead) start over.
+COLD_START_FRACTION = 0.02
 #: Weight of the rest posture below every target [1/rad^2]: a tie-breaker only.
 REST_POSTURE_WEIGHT = 0.01
 #: The canonical bones whose contacts are detected and pinned (a foot's heel point and its toe).
@@ -262,13 +267,17 @@ def _with_direction(found: dict[str, str], anchor: dict, rest_points: np.ndarray
 
 
 def widened(skeleton: Skeleton, margin: float) -> Skeleton:
-    """``skeleton`` with the ranges of its ball joints (two or more DOFs) widened by ``margin`` each side [rad];
-    hinges (knees, elbows) keep theirs, so a straight limb never bends the wrong way."""
+    """``skeleton`` with the ranges of its ball joints (two or more DOFs) widened by ``margin`` each side [rad], but
+    never past +-pi: an angle beyond is a second copy of a pose the range already holds (a shoulder raised 210 deg is
+    one lowered 150 deg the other way), a branch a warm-started solve slides into and cannot leave (CMU 001_14's
+    arms overhead). Hinges (knees, elbows) keep theirs, so a straight limb never bends the wrong way."""
     ball = np.zeros(skeleton.n_dofs, dtype=bool)
     for dofs in skeleton.joint_dofs:
         if len(dofs) >= 2:
             ball[list(dofs)] = True
-    return replace(skeleton, lower=skeleton.lower - margin * ball, upper=skeleton.upper + margin * ball)
+    lower = np.minimum(skeleton.lower, np.maximum(skeleton.lower - margin * ball, -np.pi))
+    upper = np.maximum(skeleton.upper, np.minimum(skeleton.upper + margin * ball, np.pi))
+    return replace(skeleton, lower=lower, upper=upper)
 
 
 class Retargeter:
@@ -387,6 +396,8 @@ class Retargeter:
         levels = {f: BONE_PRIORITIES.get(self._bone[f], 2) for f in self.mapping if f != self._root}
         side = {f: "left" if self._bone[f].startswith("left") else "right" for f in contacts.names}
         s = self.solver()
+        frames = [self.skeleton.frame_of(f) for f in self.mapping]
+        cold = COLD_START_FRACTION * skeleton_height(self.skeleton)
         n = len(points)
         Q = np.empty((n, self.skeleton.n_dofs))
         got = np.empty((n, self.skeleton.n_frames, 3))
@@ -395,9 +406,14 @@ class Retargeter:
             level = {**levels, **_foot_levels(contacts, i, side, levels)}
             s.set_targets({f: Target(points[i, k], position_only=True, priority=level[f])
                            for k, f in enumerate(self.mapping) if f in level})
-            for _ in range(STEPS_PER_FRAME if i else FIRST_FRAME_STEPS):
-                if s.step().step_norm < 1e-5:
-                    break
+            _steps(s, STEPS_PER_FRAME if i else FIRST_FRAME_STEPS)
+            miss = _worst_miss(s, frames, points[i])
+            if i and miss > cold:  # trapped by the warm start? try from the rest pose
+                warm = s.q.copy()
+                s.set_q(self.skeleton.rest)
+                _steps(s, FIRST_FRAME_STEPS)
+                if _worst_miss(s, frames, points[i]) >= miss:
+                    s.set_q(warm)
             Q[i] = s.q
             got[i] = s.world_positions()
             if progress is not None:
@@ -414,6 +430,18 @@ class Retargeter:
         off_line = np.linalg.norm(np.cross(rise, _unit(across)), axis=-1)
         eps = DEGENERATE_FRACTION * height
         return (width < eps) | (off_line < eps)
+
+
+def _steps(s: Solver, most: int) -> None:
+    """Up to ``most`` prioritised steps of ``s``, fewer once a step moves the pose by under 1e-5 rad."""
+    for _ in range(most):
+        if s.step().step_norm < 1e-5:
+            break
+
+
+def _worst_miss(s: Solver, frames: list[int], points: np.ndarray) -> float:
+    """Largest distance [m] of the skeleton frames ``frames`` from their targets ``points`` (len(frames), 3)."""
+    return float(np.linalg.norm(s.world_positions()[frames] - points, axis=-1).max())
 
 
 def _foot_levels(contacts: Contacts, i: int, side: Mapping[str, str], levels: Mapping[str, int]) -> dict[str, int]:

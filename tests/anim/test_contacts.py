@@ -6,7 +6,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gsik.anim.contacts import ContactSettings, detect_contacts, pin_targets, planted_speed, point_speeds
+from gsik.anim.contacts import (ContactSettings, detect_contacts, pin_targets, planted_speed, point_speeds,
+                                smoothed)
 
 
 def _steps(fps: float, seconds: float = 3.0, drift: float = 0.02) -> np.ndarray:
@@ -71,3 +72,34 @@ def test_pinning_never_moves_a_point_farther_than_its_span_reaches(height, seed)
         reach = np.linalg.norm(p[a:b, k] - p[a:b, k].mean(axis=0), axis=-1).max()
         assert np.linalg.norm(pinned[a:b, k] - p[a:b, k], axis=-1).max() <= reach + 1e-12
     assert point_speeds(p, 30.0).shape == (90, 2)
+
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(0.5, 2.0), st.integers(0, 2**31 - 1))
+def test_a_contact_never_holds_a_point_far_from_where_the_clip_has_it(height, seed):
+    """Slowly wandering feet: every contact span's smoothed path stays within the release distance of its start,
+    so the pin (the span's mean) is within twice that of the smoothed path."""
+    rng = np.random.default_rng(seed)
+    p = np.cumsum(rng.normal(scale=0.004, size=(120, 2, 3)), axis=0)
+    settings_ = ContactSettings(speed_fraction=0.5)
+    c = detect_contacts(p, ("a", "b"), 30.0, height, settings=settings_)
+    radius = settings_.release_fraction * height
+    path = smoothed(p, 3)  # the blend time (0.1 s) at 30 fps
+    for k, a, b in c.spans:
+        assert np.linalg.norm(path[a:b, k] - path[a, k], axis=-1).max() <= radius
+        pin = pin_targets(p, c)[a:b, k]
+        assert np.linalg.norm(pin - path[a:b, k], axis=-1).max() <= 2 * radius + 1e-12
+
+
+def test_a_foot_that_creeps_through_a_stance_is_released_and_planted_anew_each_time_it_leaves_its_spot():
+    fps = 30.0
+    p = np.zeros((60, 1, 3))
+    p[:, 0, 0] = np.linspace(0.0, 0.06, 60)  # 6 cm over 2 s (3 cm/s): low and slow throughout
+    c = detect_contacts(p, ("toe",), fps, 1.75)
+    radius = ContactSettings().release_fraction * 1.75
+    assert len(c.spans) >= 2 and not c.planted.all()  # released where it left its spot: free, then planted anew
+    pinned = pin_targets(p, c)
+    assert planted_speed(pinned, c.planted, fps) == 0.0  # each contact holds still
+    inside = c.planted[:, 0]
+    assert np.abs(pinned[inside, 0, 0] - p[inside, 0, 0]).max() <= radius  # and near where the clip has it

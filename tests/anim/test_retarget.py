@@ -9,7 +9,7 @@ import pytest
 
 from gsik import load_skeleton
 from gsik.anim.motion import Motion
-from gsik.anim.retarget import Retargeter, best_rotations
+from gsik.anim.retarget import Retargeter, best_rotations, widened
 from gsik.anim.retarget_map import read_mapping, resolve_mapping, skeleton_bones
 from gsik.errors import RetargetError
 from gsik.humanoid import Rig
@@ -143,3 +143,30 @@ def test_gsik_retarget_writes_a_biped_clip_and_reports_every_mapped_joint(tmp_pa
     assert written.n_frames == 10 and {"hips", "left_knee", "right_elbow"} <= {j.name for j in written.joints}
     text = io.StringIO()
     assert main(["retarget", str(src), "--out", str(tmp_path / "x.txt")], out=text) == 2
+
+
+def test_the_limit_margin_never_widens_a_ball_joint_past_half_a_turn():
+    """A shoulder raised past 180 deg is the same arm lowered the other way: a copy of poses the range holds,
+    where a warm-started solve got trapped (CMU 001_14's arms overhead); hinges keep their limits."""
+    sk = load_skeleton("biped")
+    wide = widened(sk, np.radians(30))
+    assert np.all(wide.upper <= np.maximum(sk.upper, np.pi)) and np.all(wide.lower >= np.minimum(sk.lower, -np.pi))
+    d = sk.dof_names.index("right_shoulder.x")
+    assert wide.upper[d] == pytest.approx(np.pi) and wide.lower[d] == pytest.approx(sk.lower[d] - np.radians(30))
+    knee = sk.dof_names.index("left_knee.x")
+    assert (wide.lower[knee], wide.upper[knee]) == (sk.lower[knee], sk.upper[knee])
+
+
+def test_a_frame_the_warm_start_cannot_reach_is_solved_again_from_the_rest_pose(monkeypatch):
+    """With no warm-started steps at all, every frame after the first stays at the first one's pose, far from
+    the moving clip; each is then solved again from the rest pose (as 001_14's arms, wound overhead past what the
+    next frames could undo, are) and lands within the check's 2% of the height."""
+    import gsik.anim.retarget as retarget_module
+
+    clip, _ = _biped_clip()
+    monkeypatch.setattr(retarget_module, "STEPS_PER_FRAME", 0)
+    r = Retargeter(load_skeleton("biped"), clip, BIPED_EXTRA).retarget(clip)
+    assert np.percentile(r.errors, 95, axis=0).max() < 0.02 * r.height
+    monkeypatch.setattr(retarget_module, "COLD_START_FRACTION", np.inf)  # the retry off: the frames stay behind
+    stuck = Retargeter(load_skeleton("biped"), clip, BIPED_EXTRA).retarget(clip)
+    assert np.percentile(stuck.errors, 95, axis=0).max() > 0.02 * stuck.height
