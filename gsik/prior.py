@@ -228,7 +228,8 @@ def bundled_prior_path(skeleton: str = "biped") -> Path:
 
 
 def bundled_prior(skeleton: str = "biped") -> PosePrior:
-    """The pose prior shipped for a bundled skeleton (the biped's: learned from real motion capture)."""
+    """The pose prior shipped for a bundled skeleton (the biped's and the humanoid's: learned from real motion
+    capture, ``gsik learn-prior --onto``)."""
     path = bundled_prior_path(skeleton)
     if not path.exists():
         raise PriorError(f"no pose prior is bundled for skeleton {skeleton!r}; bundled: "

@@ -23,15 +23,17 @@ from gsik.errors import PriorError
 from gsik.prior import PosePrior, choose_shrinkage, regularised, training_poses
 from gsik.skeleton import Skeleton
 
-#: The reflection x -> -x: the biped's sagittal plane is x = 0 (its right side is +x).
+#: The reflection x -> -x: a gsik skeleton's sagittal plane is x = 0 (its right side is +x; the biped, the
+#: humanoid).
 MIRROR = np.diag([-1.0, 1.0, 1.0])
 
 
 def mirror_signs(skeleton: Skeleton) -> tuple[np.ndarray, np.ndarray]:
     """Each DOF's mirror twin (n_dofs,) int and sign (n_dofs,): ``mirrored[:, twin] = sign * q``.
 
-    A ``left_*`` DOF's twin is the ``right_*`` one of the same name and back;
-    any other DOF is its own twin. Reflecting a rotation about axis ``a`` in
+    A ``left_*`` DOF's twin is the ``right_*`` one of the same name and back
+    (by name, so on any skeleton: wrists, clavicles, ...); any other DOF is its
+    own twin. Reflecting a rotation about axis ``a`` in
     the plane x = 0 gives the rotation about ``-M a`` by the same angle, so a
     pitch (x) keeps its sign and a roll (y) or twist (z) changes it.
 

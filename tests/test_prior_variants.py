@@ -30,6 +30,11 @@ BUNDLED_SOURCE = ("every 10th frame of the shared motion capture, 4 performers, 
                   "(test data of the bvhtools 1.6.0 package, MIT licence) and 15 clips of subjects 1, 2 and 3 of the "
                   "CMU Graphics Lab Motion Capture Database (free to use, not to be resold) on the Character "
                   "Creator rig")
+#: The humanoid's (``--onto humanoid``; README, "Natural poses").
+HUMANOID_SOURCE = ("every 10th frame of the shared motion capture, 4 performers, mirrored, retargeted onto the "
+                   "humanoid: mocap_bvhtools_test.bvh (test data of the bvhtools 1.6.0 package, MIT licence) and 15 "
+                   "clips of subjects 1, 2 and 3 of the CMU Graphics Lab Motion Capture Database (free to use, not to "
+                   "be resold) on the Character Creator rig")
 
 
 @pytest.fixture(scope="module")
@@ -43,18 +48,29 @@ def _random_poses(sk, n: int, seed: int = 0) -> np.ndarray:
     return sk.lower + 0.1 + rng.uniform(size=(n, sk.n_dofs)) * (sk.upper - sk.lower - 0.2)
 
 
-def test_a_mirrored_pose_is_the_mirror_image_of_the_body_and_mirroring_twice_gives_it_back(biped):
-    Q = np.clip(_random_poses(biped, 20), -np.minimum(-biped.lower, biped.upper),
-                np.minimum(-biped.lower, biped.upper))  # inside both sides' limits, so nothing is clipped
-    M = mirror_poses(Q, biped)
-    np.testing.assert_allclose(mirror_poses(M, biped), Q, atol=1e-12)
-    swap = {"left_hand": "right_hand", "right_knee": "left_knee", "head": "head", "left_toe": "right_toe"}
+def _twin(name: str) -> str:
+    """The frame of the other side: ``left_*`` <-> ``right_*``, any other frame itself."""
+    for a, b in (("left_", "right_"), ("right_", "left_")):
+        if name.startswith(a):
+            return b + name[len(a):]
+    return name
+
+
+@pytest.mark.parametrize("name", ["biped", "humanoid"])
+def test_a_mirrored_pose_is_the_mirror_image_of_the_body_and_mirroring_twice_gives_it_back(name):
+    """Every frame of the mirrored pose sits where its other side's frame sat, reflected in x = 0."""
+    sk = load_skeleton(name)
+    both = np.minimum(-sk.lower, sk.upper)  # inside both sides' limits, so nothing is clipped
+    Q = np.clip(_random_poses(sk, 20), -both, both)
+    M = mirror_poses(Q, sk)
+    assert not np.allclose(M, Q)
+    np.testing.assert_allclose(mirror_poses(M, sk), Q, atol=1e-12)
+    twin = [sk.frame_of(_twin(f)) for f in sk.frame_names]
+    assert twin != list(range(sk.n_frames))
     for q, m in zip(Q[:5], M[:5]):
-        p = world_frames(biped, q, np.eye(4), "pelvis")[1]
-        pm = world_frames(biped, m, np.eye(4), "pelvis")[1]
-        for name in ("left_hand", "right_knee", "head", "left_toe"):
-            np.testing.assert_allclose(pm[biped.frame_of(swap[name])], p[biped.frame_of(name)] * [-1, 1, 1],
-                                       atol=1e-9)
+        p = world_frames(sk, q, np.eye(4), "pelvis")[1]
+        pm = world_frames(sk, m, np.eye(4), "pelvis")[1]
+        np.testing.assert_allclose(pm[twin], p * [-1, 1, 1], atol=1e-9)
 
 
 def test_normalising_the_performer_away_keeps_their_stance_out_of_the_covariance(biped):
@@ -123,14 +139,31 @@ def test_learn_prior_over_a_folder_learns_every_performer_and_refuses_one_clip_o
     assert "--frames applies to one clip only" in capsys.readouterr().err
 
 
+def test_learn_prior_onto_the_humanoid_learns_its_dofs_from_a_folder_or_one_clip(tmp_path):
+    _write_clips(tmp_path / "clips", ["001_01.bvh", "002_01.bvh"])
+    humanoid = load_skeleton("humanoid")
+    for clips, out in (([tmp_path / "clips"], tmp_path / "folder.npz"),
+                       ([tmp_path / "clips" / "001_01.bvh"], tmp_path / "one.npz")):
+        text = io.StringIO()
+        assert main(["learn-prior", *map(str, clips), "--onto", "humanoid", "--stride", "1", "--out", str(out)],
+                    out=text) == 0, text.getvalue()
+        prior = read_prior(out)
+        assert (prior.skeleton, prior.dof_names) == ("humanoid", humanoid.dof_names)
+        prior.check_fits(humanoid)
+    assert read_prior(tmp_path / "folder.npz").n_frames == 2 * 2 * 24  # both clips and their mirror images
+    assert "humanoid frames not mapped" in text.getvalue()  # the one clip's report names its target
+
+
 @pytest.mark.skipif(MOCAP is None, reason="the shared motion capture (../shared/mocap) is not beside the repository")
-def test_the_bundled_prior_is_rebuilt_by_its_one_command(tmp_path):
+@pytest.mark.parametrize("name, source", [("biped", BUNDLED_SOURCE), ("humanoid", HUMANOID_SOURCE)])
+def test_the_bundled_prior_is_rebuilt_by_its_one_command(tmp_path, name, source):
     """The README's command over every shared clip gives the bundled file (a minute or two: every 10th frame)."""
     out = tmp_path / "prior.npz"
     text = io.StringIO()
-    assert main(["learn-prior", str(MOCAP), "--stride", str(BUNDLED_STRIDE), "--out", str(out),
-                 "--source", BUNDLED_SOURCE], out=text) == 0, text.getvalue()
-    rebuilt, bundled = read_prior(out), read_prior(bundled_prior_path("biped"))
+    assert main(["learn-prior", str(MOCAP), "--onto", name, "--stride", str(BUNDLED_STRIDE), "--out", str(out),
+                 "--source", source], out=text) == 0, text.getvalue()
+    rebuilt, bundled = read_prior(out), read_prior(bundled_prior_path(name))
+    assert (rebuilt.skeleton, rebuilt.dof_names) == (bundled.skeleton, load_skeleton(name).dof_names)
     assert (rebuilt.n_frames, rebuilt.shrinkage, rebuilt.source) == (bundled.n_frames, bundled.shrinkage,
                                                                     bundled.source)
     np.testing.assert_allclose(rebuilt.mean, bundled.mean, rtol=0, atol=1e-9)

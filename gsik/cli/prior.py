@@ -1,4 +1,5 @@
-"""``gsik retarget`` (a clip onto the biped) and ``gsik learn-prior`` (a pose prior from a clip)."""
+"""``gsik retarget`` (a clip onto the biped or ``--onto`` a humanoid) and ``gsik learn-prior`` (a pose prior from
+clips, for the same skeleton)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,9 @@ from typing import TextIO
 
 import numpy as np
 
-import gsik
 from gsik.anim.retarget import Retargeted
 from gsik.cli.batch import add_batch_options
-from gsik.cli.common import check_out
+from gsik.cli.common import check_out, load_any_skeleton
 from gsik.cli.progress import progress_for
 from gsik.cli.retarget_batch import learn_prior_many, retarget_clip, retarget_folder, verdict
 from gsik.io.bvh_skeleton import write_motion_bvh
@@ -35,18 +35,16 @@ def add_commands(add, common) -> None:
     p.add_argument("--limit-margin", type=float, default=30.0, metavar="DEG",
                    help="let the retargeted pose exceed the target's joint limits by this much each side "
                         "(default 30: real motion exceeds the biped's authoring ranges; 0 keeps them)")
-    p.add_argument("--onto", metavar="SKELETON", default="biped",
-                   help="the humanoid to retarget onto: a bundled skeleton, a skeleton .yaml, a .urdf or a .bvh "
-                        "clip's skeleton (default biped)")
+    _onto_option(p)
     p.add_argument("--out", metavar="OUT.bvh|DIR", help="write the retargeted motion as BVH (a folder for a folder)")
     p.add_argument("--units", choices=("cm", "m"), default="cm", help="BVH length unit (default cm)")
     p.add_argument("--up", choices=("z", "y"), help="BVH up axis (default: the clip's)")
     common(p, solver=False)
     p.set_defaults(run=cmd_retarget)
 
-    p = add("learn-prior", "learn the biped's pose prior (a Gaussian over its angles) from BVH clips or folders",
-            "Retarget the clips onto the biped (as 'gsik retarget') and write the mean and regularised "
-            "covariance of their poses as a .npz pose prior (gsik.prior); the shrinkage is chosen by "
+    p = add("learn-prior", "learn a skeleton's pose prior (a Gaussian over its angles) from BVH clips or folders",
+            "Retarget the clips onto the biped (or --onto any humanoid; as 'gsik retarget') and write the mean "
+            "and regularised covariance of their poses as a .npz pose prior (gsik.prior); the shrinkage is chosen by "
             "cross-validation over time segments. Several clips or a folder (every .bvh under it): every "
             "--stride-th frame, each clip's rig recognised on its own, on a process pool or a Dask cluster "
             "(as 'gsik retarget DIR'), and the poses and their mirror images "
@@ -55,6 +53,7 @@ def add_commands(add, common) -> None:
                    "or folders of them (a CMU 'SSS_TT.bvh' clip belongs to subject SSS, any other to itself)")
     p.add_argument("--map", metavar="MAP.yaml", help="biped frame -> clip joint entries the heuristics miss "
                    "(one clip only)")
+    _onto_option(p)
     p.add_argument("--file-up", choices=("auto", "y", "z"), default="auto",
                    help="the clip's up axis (default: detected over the whole clip; one clip only)")
     p.add_argument("--stride", type=_frame_count, metavar="N",
@@ -71,6 +70,12 @@ def add_commands(add, common) -> None:
                         "over time segments) instead of a single Gaussian")
     common(p, solver=False)
     p.set_defaults(run=cmd_learn_prior)
+
+
+def _onto_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--onto", metavar="SKELETON", default="biped",
+                   help="the humanoid to retarget onto: a bundled skeleton, a skeleton .yaml, a .urdf or a .bvh "
+                        "clip's skeleton (default biped)")
 
 
 def _components(text: str) -> int | str:
@@ -155,12 +160,12 @@ def cmd_learn_prior(args: argparse.Namespace, out: TextIO) -> int:
 def _fit_and_write(args: argparse.Namespace, q: np.ndarray, path, follow_symlinks: bool) -> str:
     """Fit the prior (a Gaussian, or ``--components`` of them) to ``q`` (n, n_dofs) [rad] and write it to ``path``;
     the report line."""
-    biped = gsik.load_skeleton("biped")
+    skeleton = load_any_skeleton(args.onto)
     if args.components is None:
-        prior = fit_prior(q, biped, source=args.source)
+        prior = fit_prior(q, skeleton, source=args.source)
         write_prior(prior, path, follow_symlinks)
         return f"wrote {path}: {prior.n_frames} poses, shrinkage {prior.shrinkage:g}"
-    mixture = fit_mixture(q, biped, None if args.components == "auto" else args.components, source=args.source)
+    mixture = fit_mixture(q, skeleton, None if args.components == "auto" else args.components, source=args.source)
     write_mixture(mixture, path, follow_symlinks)
     return (f"wrote {path}: {mixture.n_frames} poses, {mixture.n_components} components, "
             f"shrinkage {mixture.shrinkage:g}")

@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import TextIO
 
 
-import gsik
 from gsik.anim.mocap_set import by_performer, clip_paths, retarget_clips
 from gsik.anim.retarget import Retargeted, Retargeter
 from gsik.anim.retarget_check import RetargetCheck
@@ -98,10 +97,11 @@ def retarget_one(args: argparse.Namespace, write: bool, path: str) -> ClipOutcom
     return ClipOutcome(name, cells, outputs=((name, bvh_text(args, r).encode("utf-8")),) if write else ())
 
 
-def learn_strided(stride: int, cache: str | None, path: str) -> ClipOutcome:
-    """Retarget every ``stride``-th frame of one clip for the prior (in a worker; ``cache``: see
-    :func:`gsik.anim.mocap_set.retarget_clips`): its poses and performer in the table, the clip as payload."""
-    clip = retarget_clips(gsik.load_skeleton("biped"), [path], stride, cache)[0]
+def learn_strided(onto: str, stride: int, cache: str | None, path: str) -> ClipOutcome:
+    """Retarget every ``stride``-th frame of one clip onto the skeleton ``onto`` (``--onto``) for the prior (in a
+    worker; ``cache``: see :func:`gsik.anim.mocap_set.retarget_clips`): its poses and performer in the table, the
+    clip as payload."""
+    clip = retarget_clips(load_any_skeleton(onto), [path], stride, cache)[0]
     return ClipOutcome(Path(path).name, (str(len(clip.q)), clip.performer), payload=clip)
 
 
@@ -131,7 +131,7 @@ def learn_prior_many(args: argparse.Namespace, out: TextIO) -> int:
     stride = args.stride or MANY_STRIDE
     target = _prior_path(args.out)
     clips = [str(p) for p in clip_paths(args.clips)]
-    work = functools.partial(learn_strided, stride, args.cache)
+    work = functools.partial(learn_strided, args.onto, stride, args.cache)
     outcomes = run_batch(args, work, clips, "learn-prior").outcomes
     out.write(format_table(("poses", "performer"), outcomes, left=(1,)) + "\n")
     out.write(summary_line(outcomes, 0, None) + "\n")
@@ -142,7 +142,7 @@ def learn_prior_many(args: argparse.Namespace, out: TextIO) -> int:
     poses = by_performer(good)
     source = args.source or (f"every {stride}th frame of {len(good)} clips of {len(poses)} performers: "
                              + ", ".join(c.name for c in good))
-    prior = learn_prior(poses, gsik.load_skeleton("biped"), source)
+    prior = learn_prior(poses, load_any_skeleton(args.onto), source)
     path, follow = target
     write_prior(prior, path, follow)
     out.write(f"wrote {path}: {prior.n_frames} poses of {len(poses)} performers (and their mirror images), "

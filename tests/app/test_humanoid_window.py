@@ -49,7 +49,7 @@ def test_file_new_on_the_humanoid_shows_its_mannequin_and_a_turned_hand_turns_it
     # Its mannequin has hands: a solid carried by each wrist.
     carriers = {sk.frame_names[c] for m in window.body.mannequin.meshes for c in m.carriers}
     assert {"left_wrist.x", "right_wrist.x", "chest.z", "left_clavicle.z"} <= carriers
-    assert doc.controls.posture_strength > 0.0 and not doc.controls.natural  # no prior: the rest posture
+    assert doc.controls.natural and doc.solver.posture is not None  # its own bundled prior: natural
     wait_for(qtbot, lambda: not doc.needs_solving)
     chest, hips = sk.frame_of("chest.z"), sk.frame_of("hips")
     R0 = doc.world_rotations()

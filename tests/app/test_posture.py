@@ -31,9 +31,11 @@ def _reach(doc: Document) -> np.ndarray:
     return doc.q
 
 
-def test_the_biped_starts_natural_with_its_bundled_prior_as_the_posture():
-    doc = Document()
-    prior = bundled_prior("biped")
+@pytest.mark.parametrize("name", ["biped", "humanoid"])
+def test_a_bundled_skeleton_starts_natural_with_its_bundled_prior_as_the_posture(name):
+    doc = Document(gsik.load_skeleton(name))
+    prior = bundled_prior(name)
+    assert prior.dof_names == doc.skeleton.dof_names
     c = doc.controls
     assert c.natural and c.posture.can_be_natural and c.posture_strength == NATURAL_STRENGTH
     posture = doc.solver.posture
