@@ -102,9 +102,12 @@ def test_a_biped_clip_retargets_onto_the_biped_joint_for_joint():
     assert r.unmapped_frames == () and "head" in r.unmapped_clip
     want, got = motion.positions(), r.motion.positions()
     joints = [motion.skeleton.frame_of(j) for j in motion.skeleton.joint_names]
-    # A few warm-started steps per frame: within millimetres of the clip's own biped, not exactly on it.
-    assert np.abs(got[1:, joints] - want[1:, joints]).max() < 5e-3  # metres
-    assert r.errors[1:].max() < 5e-3
+    # A few warm-started steps per frame: within a centimetre of the clip's own biped, not exactly on it (this
+    # random clip's fastest frame leaves the lowest-priority shoulder, and its elbow, up to 10.2 mm behind with the
+    # solver's settling of issue 16; 12 steps a frame close it, at up to twice the cost on every clip).
+    assert np.abs(got[1:, joints] - want[1:, joints]).max() < 1.1e-2  # metres
+    assert np.median(np.abs(got[1:, joints] - want[1:, joints])) < 1e-4
+    assert r.errors[1:].max() < 1.1e-2
     # The first frame starts from the rest pose: with the human ranges of motion (issue 18) its prioritised steps
     # stall 8.7 mm from this clip's first pose at a shoulder, the lowest-priority target (the next frames,
     # warm-started, converge).
