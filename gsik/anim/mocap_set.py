@@ -28,6 +28,9 @@ import numpy as np
 from gsik.anim.retarget import Retargeter
 from gsik.errors import GsikFileError, RetargetError
 from gsik.io.bvh import BvhClip, read_bvh
+from gsik.io.bvh.limits import MAX_BVH_BYTES
+from gsik.io.files import atomic_write_bytes, read_bounded
+from gsik.io.npz import npz_bytes
 from gsik.skeleton import Skeleton
 
 #: A CMU database clip name: subject, underscore, trial number.
@@ -105,7 +108,7 @@ def retarget_clip(skeleton: Skeleton, path: str | os.PathLike, stride: int = 1) 
 def _cache_file(cache: Path, skeleton: Skeleton, path: Path, stride: int) -> Path:
     """Where a clip's retargeted frames are cached: keyed by the clip's bytes, the skeleton and the stride."""
     key = hashlib.sha256()
-    key.update(path.read_bytes())
+    key.update(read_bounded(path, "BVH clip", MAX_BVH_BYTES))  # the bounded reader every clip goes through
     for a in (skeleton.lower, skeleton.upper, skeleton.rest):
         key.update(np.ascontiguousarray(a, dtype=float).tobytes())
     key.update(repr((skeleton.name, skeleton.dof_names, stride)).encode())
@@ -144,10 +147,11 @@ def retarget_clips(skeleton: Skeleton, paths: Iterable[str | os.PathLike], strid
                                           tuple(str(m) for m in z["mapped"]), z["targets"], z["errors"]))
             continue
         r = retarget_clip(skeleton, path, stride)
-        if file is not None:
+        if file is not None:  # atomically, as every file gsik writes: a killed run leaves no torn cache entry
             file.parent.mkdir(parents=True, exist_ok=True)
-            np.savez(file, q=r.q, world_from_root=r.world_from_root, mapped=np.array(r.mapped), targets=r.targets,
-                     errors=r.errors)
+            atomic_write_bytes(file, npz_bytes({"q": r.q, "world_from_root": r.world_from_root,
+                                                "mapped": np.array(r.mapped), "targets": r.targets,
+                                                "errors": r.errors}))
         out.append(r)
     if progress is not None:
         progress(len(paths), len(paths))

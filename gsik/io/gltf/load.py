@@ -16,7 +16,7 @@ import warnings
 from typing import NamedTuple
 
 from gsik.errors import GltfError, show_value
-from gsik.io.files import read_bytes
+from gsik.io.files import read_bounded
 
 #: Largest glTF or GLB file read [bytes].
 MAX_FILE_BYTES = 512 * 1024 * 1024
@@ -47,17 +47,6 @@ def gltf_library():
     return pygltflib
 
 
-def _size_checked(path: str | os.PathLike, limit: int, what: str) -> None:
-    """Refuse a file larger than ``limit`` bytes before reading it (a missing file is read_bytes' error)."""
-    try:
-        size = os.stat(path).st_size
-    except OSError:
-        return
-    if size > limit:
-        raise GltfError(f"{what} {show_value(os.fspath(path), 240)}: {size:,} bytes, more than gsik reads "
-                        f"({limit:,})")
-
-
 def load_gltf_file(path: str | os.PathLike) -> LoadedFile:
     """The JSON document and buffers of ``path`` (``.glb`` or ``.gltf``), bounded and checked.
 
@@ -66,8 +55,7 @@ def load_gltf_file(path: str | os.PathLike) -> LoadedFile:
             declared, or outside the file's folder.
         GsikFileError: the file cannot be read.
     """
-    _size_checked(path, MAX_FILE_BYTES, "glTF file")
-    data = read_bytes(path, "glTF file")
+    data = read_bounded(path, "glTF file", MAX_FILE_BYTES)
     where = show_value(os.fspath(path), 240)
     document, glb_blob = _parse(data, where)
     _check_counts(document, where)
@@ -178,5 +166,4 @@ def _external(uri: str, folder: str, what: str) -> bytes:
     target = os.path.realpath(os.path.join(folder, urllib.parse.unquote(parsed.path)))
     if os.path.commonpath([target, os.path.realpath(folder)]) != os.path.realpath(folder):
         raise GltfError(f"{what}: uri {show_value(uri)} points outside the glTF file's folder")
-    _size_checked(target, MAX_BUFFER_BYTES, f"{what}: buffer file")
-    return read_bytes(target, "glTF buffer")
+    return read_bounded(target, f"{what}: buffer file", MAX_BUFFER_BYTES)
