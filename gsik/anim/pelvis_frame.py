@@ -22,15 +22,16 @@ MIN_UP_OFFSET = 0.1
 ROTATION_TOLERANCE = 1e-6
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
+def unit(v: np.ndarray) -> np.ndarray:
+    """``v`` (..., 3) scaled to unit length along its last axis (zero vectors stay zero)."""
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
 
 
 def pelvis_frames(left_hip: np.ndarray, right_hip: np.ndarray, neck: np.ndarray) -> np.ndarray:
     """(n, 3, 3) pelvis orientations from (n, 3) points: x left hip to right hip, z towards the neck, y forward."""
-    x = _unit(right_hip - left_hip)
+    x = unit(right_hip - left_hip)
     z = neck - 0.5 * (left_hip + right_hip)
-    z = _unit(z - np.sum(z * x, axis=-1, keepdims=True) * x)
+    z = unit(z - np.sum(z * x, axis=-1, keepdims=True) * x)
     return np.stack([x, np.cross(z, x), z], axis=-1)
 
 
@@ -39,7 +40,7 @@ def up_offsets(left_hip: np.ndarray, right_hip: np.ndarray, point: np.ndarray) -
     axis = right_hip - left_hip
     width = np.linalg.norm(axis, axis=-1)
     z = point - 0.5 * (left_hip + right_hip)
-    x = _unit(axis)
+    x = unit(axis)
     perp = np.linalg.norm(z - np.sum(z * x, axis=-1, keepdims=True) * x, axis=-1)
     return perp / np.maximum(width, 1e-300)
 

@@ -46,7 +46,7 @@ import numpy as np
 
 from gsik.anim.contacts import Contacts, detect_contacts, pin_targets, planted_speed
 from gsik.anim.motion import Motion
-from gsik.anim.pelvis_frame import check_rotations, pelvis_frames, rig_lean, up_reference
+from gsik.anim.pelvis_frame import check_rotations, pelvis_frames, rig_lean, unit, up_reference
 from gsik.anim.retarget_check import RetargetCheck, Tolerances, check_retarget
 from gsik.anim.retarget_map import HEAD_TOP, resolve_mapping, skeleton_bones
 from gsik.errors import RetargetError
@@ -172,20 +172,16 @@ def _leg_length(points: Callable[[str], np.ndarray]) -> float:
                      + np.linalg.norm(points(f"{s}LowerLeg") - points(f"{s}Foot")) for s in ("left", "right"))
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
-
-
 def best_rotations(rest: np.ndarray, now: np.ndarray) -> np.ndarray:
     """Rotations (n, 3, 3) best turning directions ``rest`` (m, 3) onto ``now`` (n, m, 3) (Kabsch, no reflection)."""
     if rest.shape[0] == 1:  # one direction: the shortest turn
-        a, b = _unit(rest[0]), _unit(now[:, 0])
+        a, b = unit(rest[0]), unit(now[:, 0])
         v, c = np.cross(a, b), np.sum(a * b, axis=-1)
         K = np.zeros((len(b), 3, 3))
         K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
         K -= np.transpose(K, (0, 2, 1))
         return np.eye(3) + K + K @ K / np.maximum(1.0 + c, 1e-9)[:, None, None]
-    H = np.einsum("mi,nmj->nij", _unit(rest), _unit(now))
+    H = np.einsum("mi,nmj->nij", unit(rest), unit(now))
     U, _, Vt = np.linalg.svd(H)
     d = np.sign(np.linalg.det(np.transpose(Vt, (0, 2, 1)) @ np.transpose(U, (0, 2, 1))))
     D = np.broadcast_to(np.eye(3), H.shape).copy()
@@ -427,7 +423,7 @@ class Retargeter:
         across = right - left
         width = np.linalg.norm(across, axis=-1)
         rise = clip_points[:, col[self._spine]] - 0.5 * (left + right)
-        off_line = np.linalg.norm(np.cross(rise, _unit(across)), axis=-1)
+        off_line = np.linalg.norm(np.cross(rise, unit(across)), axis=-1)
         eps = DEGENERATE_FRACTION * height
         return (width < eps) | (off_line < eps)
 
