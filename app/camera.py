@@ -38,6 +38,20 @@ def set_view(plotter, name: str, points: np.ndarray) -> None:
     frame_points(plotter, points)
 
 
+def box_corners(bounds) -> np.ndarray:
+    """The 8 corners (8, 3) of an axis-aligned box given as VTK bounds ``(xmin, xmax, ymin, ymax, zmin, zmax)``."""
+    x0, x1, y0, y1, z0, z1 = (float(b) for b in bounds)
+    return np.array([(x, y, z) for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)])
+
+
+def body_extent(body) -> np.ndarray:
+    """The corners (k, 3) [m] of the boxes of a drawn body's meshes (each with a ``polydata``); none while the
+    body is hidden (sticks)."""
+    if not body.visible:
+        return np.zeros((0, 3))
+    return np.vstack([box_corners(m.polydata.bounds) for m in body.meshes])
+
+
 def _camera_axes(cam) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unit (right, up, back) of the camera; ``back`` points from the focal point to the camera."""
     back = np.array(cam.position, dtype=float) - np.array(cam.focal_point, dtype=float)

@@ -100,6 +100,8 @@ class Viewport:
         self._site_frames = np.array([sk.frame_of(n) for n in self._sites])
         self._limit_state: np.ndarray | None = None
         self.layers: list = []
+        #: Callables giving more points (k, 3) [m] that framing keeps in view: the drawn body's extent.
+        self.extents: list[Callable[[], np.ndarray]] = []
         self._build()
         self.refresh()
         self.sync_targets()
@@ -407,9 +409,10 @@ class Viewport:
 
     # -- camera ------------------------------------------------------------------
     def character_points(self) -> np.ndarray:
-        """(k, 3) every frame of the character and every target [m]."""
+        """(k, 3) every frame of the character, every target and the points of :attr:`extents` [m]."""
         T = np.array([t.position for t in self.doc.targets.values()]).reshape(-1, 3)
-        return np.vstack([self.doc.world_positions(), T])
+        more = [np.asarray(extent(), dtype=float).reshape(-1, 3) for extent in self.extents]
+        return np.vstack([self.doc.world_positions(), T, *more])
 
     def character_bounds(self) -> tuple[float, ...]:
         pts = self.character_points()

@@ -24,6 +24,7 @@ import gsik
 from gsik.anim.motion import Motion
 from gsik_studio import animations
 from gsik_studio.actions import VIEW_KEYS, make_actions, make_menus, make_toolbar
+from gsik_studio.camera import body_extent
 from gsik_studio.files import FileActions
 from gsik_studio.model import Document, FrameLoop, Playback
 from gsik_studio.model.joints import JointEditor
@@ -106,6 +107,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.rings = JointRings(self.viewport, self.joints)
         self.joint_highlight = JointHighlight(self.viewport, self.joints, self.body.overlay)
         self.body.set_mode("sticks" if self.act_sticks.isChecked() else "mannequin")  # the view's options stay
+        self.viewport.extents.append(lambda: body_extent(self.body.mannequin))
+        self.viewport.frame_all()  # the whole body in view, head and feet (the skeleton's joints stop short)
         self.loop.set_paused(self.act_pause.isChecked())
         self.set_orbit(str(self.settings.value("view/orbit", "turntable")))
         animations.fill_scenario_menu(self.scenario_menu, doc.skeleton, self.play_scenario)

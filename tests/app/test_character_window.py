@@ -24,25 +24,44 @@ def _frames(doc) -> np.ndarray:
     return T
 
 
-@pytest.fixture()
-def character_window(window, blender_character):
+#: One case per naming; across them A and T rests, with and without extra bones (twist, fingers, a prop).
+CASES = (Spec("mixamo", "T", True), Spec("unreal", "A", False), Spec("vrm", "A", True), Spec("rigify", "T", False))
+
+
+def _projected(window, points: np.ndarray) -> np.ndarray:
+    """Normalised view coordinates (k, 2) of world points (k, 3): inside the 3D view where both lie in [-1, 1]."""
+    ren = window.plotter.renderer
+    M = ren.GetActiveCamera().GetCompositeProjectionTransformMatrix(ren.GetTiledAspectRatio(), -1, 1)
+    M = np.array([[M.GetElement(i, j) for j in range(4)] for i in range(4)])
+    h = np.c_[points, np.ones(len(points))] @ M.T
+    return h[:, :2] / h[:, 3:]
+
+
+@pytest.fixture(params=CASES, ids=lambda spec: spec.stem)
+def character_window(request, window, blender_character):
     from gsik_studio.model.characters import character_of
     from gsik_studio.skinned_body import SkinnedBody
 
-    path = blender_character(Spec("mixamo", "T", True))
+    path = blender_character(request.param)
     assert window.files.import_skeleton_path(str(path), confirm=False) is True
     character = character_of(window.doc.skeleton)
     assert character is not None and isinstance(window.body.mannequin, SkinnedBody)
     return window, character
 
 
-def test_the_characters_skinned_body_is_drawn_and_follows_a_drag(qtbot, character_window, tmp_path):
+def test_the_characters_skinned_body_is_drawn_framed_and_follows_a_drag(qtbot, character_window, tmp_path):
     window, character = character_window
     doc, body = window.doc, window.body.mannequin
     mesh = body.meshes[0]
-    assert body.n_vertices == read_gltf(character.file.path).n_vertices >= 10_000
+    assert body.visible and body.n_vertices == read_gltf(character.file.path).n_vertices > 1000
     points = mesh.polydata.points  # the PolyData's own array: updated in place, never replaced
     np.testing.assert_allclose(points, skinned(skin_binding(character), _frames(doc))[0], atol=1e-6)
+    # framed on open: every vertex of the body, head top to soles and both hands, projects inside the view
+    xy = _projected(window, np.vstack([m.polydata.points for m in body.meshes]))
+    assert np.abs(xy).max() < 1.0, f"the body is cropped: view coordinates up to {np.abs(xy).max(axis=0)}"
+    assert np.ptp(xy[:, 1]) > 0.8, "the body is framed too small"
+    shot = tmp_path / f"{character.name}.png"
+    assert window.grab_window().save(str(shot))  # looked at by hand: see the README's glTF workflow
     name = character.effectors["left_hand"]
     start = np.array(doc.targets[name].position)
     hand = doc.effector_poses()[name][:3, 3].copy()
@@ -62,6 +81,7 @@ def test_the_characters_skinned_body_is_drawn_and_follows_a_drag(qtbot, characte
     assert_valid(out)
     got = blender_read(out)
     P = doc.world_positions()[doc.skeleton.joint_frame]
+    assert len(got["bones"]) == len(character.file.skins[character.skin].joints)
     for bone, head in zip(got["bones"], got["pose_heads"]):
         np.testing.assert_allclose(head, P[doc.skeleton.joint_names.index(bone)], atol=2e-5, err_msg=bone)
 
