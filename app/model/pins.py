@@ -23,13 +23,14 @@ from gsik import balance, control
 from gsik.rotations import transform
 from gsik.targets import Target
 from gsik_studio.model.events import Signal
-from gsik_studio.model.pole_places import aim_point, limbs, rest_place
+from gsik_studio.model.pole_places import aim_point, limbs, pole_joints, rest_place
 from gsik_studio.model.posture import Posture
 
 PINNED = 0  #: priority level of a pinned target
 FREE = 1  #: priority level of an unpinned target
 POLE = 2  #: priority level of a pole target: it only bends a limb in what the targets leave free
-#: Joints that get a pole target (where the skeleton has them): the knees and elbows.
+#: Joints that get a pole target (where the skeleton has them): the knees and elbows; a skeleton without them
+#: gets its recognised knees and elbows (:func:`gsik_studio.model.pole_places.pole_joints`).
 POLE_JOINTS = ("left_knee", "right_knee", "left_elbow", "right_elbow")
 #: Effectors pinned in a new document: pulling a hand never moves them unless unpinned.
 PINNED_BY_DEFAULT = ("left_foot", "right_foot", "pelvis")
@@ -95,12 +96,12 @@ class SolveControls:
         self.posture = Posture(solver)  # natural (the bundled prior) when there is one
         self._poles: dict[str, Target] = {}  # every pole placed so far, enabled or not
         self._aimed: dict[str, np.ndarray] = {}  # the aims last handed to the solver
-        self._limbs = limbs(solver.skeleton, POLE_JOINTS)  # the pole joints this skeleton has
+        self._limbs = limbs(solver.skeleton, pole_joints(solver.skeleton, POLE_JOINTS))  # the ones this skeleton has
         self.changed = Signal()
 
     @property
     def pole_joints(self) -> tuple[str, ...]:
-        """The joints of :data:`POLE_JOINTS` this skeleton has (each the middle joint of a limb)."""
+        """The knee and elbow joints this skeleton has (:data:`POLE_JOINTS` or recognised; each a limb's middle)."""
         return tuple(self._limbs)
 
     @property

@@ -19,6 +19,8 @@ from typing import NamedTuple
 import numpy as np
 
 import gsik
+from gsik.humanoid import recognise, rig_from_skeleton
+from gsik.humanoid.bones import POLE_BONES
 
 #: How far a pole rests from its joint, as a fraction of the limb's length (thigh + shin, upper arm + forearm).
 POLE_DISTANCE = 0.5
@@ -42,8 +44,25 @@ class Limb(NamedTuple):
     flex: float
 
 
+def pole_joints(skeleton: gsik.Skeleton, named: tuple[str, ...]) -> tuple[str, ...]:
+    """The joints that get pole targets: the ``named`` ones (the bundled skeletons' ``left_knee`` ...) where
+    ``skeleton`` has any, else the knees and elbows that humanoid recognition finds (:data:`POLE_BONES`, in
+    that order: a glTF character's or any imported rig's own joint names); none for a skeleton that is no humanoid.
+    """
+    have = tuple(n for n in named if n in skeleton.joint_names)
+    if have:
+        return have
+    try:
+        found = recognise(rig_from_skeleton(skeleton)).bones
+    except gsik.GsikError:
+        return ()
+    return tuple(found[b] for b in POLE_BONES.values() if found.get(b) in skeleton.joint_names)
+
+
 def limb_of(skeleton: gsik.Skeleton, joint: str) -> Limb:
-    """The limb around ``joint``: its parent joint, its first child joint (else the first site on it), its hinge.
+    """The limb around ``joint``: its parent joint, its first child joint (else the first site on it), its hinge
+    (the joint's DOF that turns furthest one way from rest: a knee's or elbow's bend, whichever local axis the rig
+    bends it about, not its twist).
 
     Raises:
         TargetError: ``joint`` is not a joint with a DOF, a parent and something below it.
@@ -57,7 +76,7 @@ def limb_of(skeleton: gsik.Skeleton, joint: str) -> Limb:
     sites = [int(f) for f in sk.site_frame if sk.frame_parent[f] == frame]
     if sk.joint_parent[j] < 0 or not sk.joint_dofs[j] or not (children or sites):
         raise gsik.TargetError(f"joint {joint!r} is not the middle joint of a limb: it cannot have a pole")
-    dof = sk.joint_dofs[j][0]
+    dof = max(sk.joint_dofs[j], key=lambda d: max(sk.upper[d] - sk.rest[d], sk.rest[d] - sk.lower[d]))
     flex = 1.0 if sk.upper[dof] - sk.rest[dof] >= sk.rest[dof] - sk.lower[dof] else -1.0
     return Limb(int(sk.joint_frame[sk.joint_parent[j]]), frame, (children or sites)[0], int(sk.dof_frame[dof]), flex)
 

@@ -24,6 +24,10 @@ HUMANOID_BONES: tuple[str, ...] = (
 REQUIRED_BONES: tuple[str, ...] = ("hips", "spine", "head") + tuple(
     f"{s}{p}" for s in SIDES for p in ("UpperArm", "LowerArm", "Hand", "UpperLeg", "LowerLeg", "Foot"))
 
+#: Pole name -> the canonical bone a pole target bends (the middle joint of a two-bone limb): knees and elbows.
+POLE_BONES = {"left_knee": "leftLowerLeg", "right_knee": "rightLowerLeg", "left_elbow": "leftLowerArm",
+              "right_elbow": "rightLowerArm"}
+
 #: The bundled biped's frames by canonical bone (its ``left_shoulder`` is the arm; it has no clavicle).
 BIPED_FRAMES = {
     "hips": "pelvis", "spine": "waist", "neck": "neck", "head": "atlas",

@@ -11,7 +11,8 @@ from blender.gltf_characters import LAYOUT, NAMINGS, Spec, blender_read
 
 import gsik
 from gsik.io.gltf import read_character, read_gltf, write_gltf
-from gsik.io.gltf.character import EFFECTOR_BONES, POLE_BONES
+from gsik.humanoid.bones import POLE_BONES
+from gsik.io.gltf.character import EFFECTOR_BONES
 from gsik.anim.motion import Motion
 
 SPECS = [Spec("mixamo", "T", True), Spec("unreal", "A", True), Spec("vrm", "T"), Spec("rigify", "A"),

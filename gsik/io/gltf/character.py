@@ -27,6 +27,7 @@ from types import MappingProxyType
 import numpy as np
 
 from gsik.errors import GltfError
+from gsik.humanoid.bones import POLE_BONES
 from gsik.io.gltf.axes import gsik_from_gltf, node_world, rigid
 from gsik.io.gltf.model import GltfFile
 from gsik.io.gltf.ranges import RestFrame, joint_limits
@@ -37,9 +38,6 @@ from gsik.skeleton import JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skelet
 #: Effector site -> the canonical (VRM) bone it sits on, in the order the skeleton lists them.
 EFFECTOR_BONES = {"head": "head", "pelvis": "hips", "left_hand": "leftHand", "right_hand": "rightHand",
                   "left_foot": "leftFoot", "right_foot": "rightFoot"}
-#: Pole name -> the canonical bone it bends (the studio's pole joints).
-POLE_BONES = {"left_knee": "leftLowerLeg", "right_knee": "rightLowerLeg", "left_elbow": "leftLowerArm",
-              "right_elbow": "rightLowerArm"}
 ROOT_EFFECTOR = "right_foot"
 #: Most skin joints made into a skeleton (three DOFs each, within gsik's solver's limits).
 MAX_JOINTS = 600
