@@ -92,3 +92,33 @@ def test_a_bad_character_changes_nothing(qtbot, window, boxes, tmp_path):
     bad.write_text(json.dumps({"asset": {"version": "2.0"}, "nodes": [{"children": [0]}]}), encoding="utf-8")
     assert window.files.import_skeleton_path(str(bad), confirm=False) is False
     assert window.doc is doc and "child twice" in str(boxes["critical"][-1])
+
+
+def test_a_characters_knee_pole_dragged_with_the_mouse_swings_the_knee(qtbot, window, blender_character):
+    from test_artist_gui import _click_widget, _press_drag_release, _settle
+
+    from gsik_studio.model.characters import character_of
+    from gsik_studio.model.pole_places import limb_of, swing_angle
+
+    assert window.files.import_skeleton_path(str(blender_character(CASES[0])), confirm=False) is True
+    doc, character = window.doc, character_of(window.doc.skeleton)
+    window.set_view("front")
+    pelvis = character.effectors["pelvis"]
+    doc.move_target(pelvis, doc.targets[pelvis].position + (0.0, 0.0, -0.08))  # crouch: the knees bend
+    _settle(qtbot, window)
+    _click_widget(window.balance_panel.poles)
+    knee = character.poles["left_knee"]  # the character's own joint, mixamorig:LeftLeg
+    assert set(doc.controls.poles) == set(character.poles.values()) and knee in window.poles.widgets
+    _settle(qtbot, window)
+    P0, pole = doc.world_positions(), doc.controls.poles[knee].position.copy()
+    at = doc.effector_poses()[pelvis][:3, 3].copy()
+    xy = window.rings.project(pole[None])[0]
+    _press_drag_release(window, xy, xy + np.array([80.0, 0.0]))  # the character faces the front view
+    assert doc.controls.poles[knee].position[0] < pole[0] - 0.05
+    assert [c.text for c in doc.history.commands][-1] == f"Move pole {knee}"
+    _settle(qtbot, window)
+    P = doc.world_positions()
+    assert abs(np.degrees(swing_angle(limb_of(doc.skeleton, knee), P0, P))) > 10.0
+    assert np.linalg.norm(doc.effector_poses()[pelvis][:3, 3] - at) < 1e-3
+    other = limb_of(doc.skeleton, character.poles["right_knee"])
+    assert abs(swing_angle(other, P0, P)) < np.radians(1.0)
