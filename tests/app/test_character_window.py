@@ -86,6 +86,16 @@ def test_the_characters_skinned_body_is_drawn_framed_and_follows_a_drag(qtbot, c
         np.testing.assert_allclose(head, P[doc.skeleton.joint_names.index(bone)], atol=2e-5, err_msg=bone)
 
 
+def test_the_biped_opens_framed_whole_from_every_preset_view(window):
+    """A z-up skeleton's mannequin (the biped: its head and soles reach past its joints) in view from every side."""
+    from gsik_studio.camera import VIEWS
+
+    for view in VIEWS:
+        window.set_view(view)
+        xy = _projected(window, np.vstack([m.polydata.points for m in window.body.mannequin.meshes]))
+        assert np.abs(xy).max() < 1.0, (view, np.abs(xy).max(axis=0))
+
+
 def test_a_bad_character_changes_nothing(qtbot, window, boxes, tmp_path):
     doc = window.doc
     bad = tmp_path / "bad.gltf"
