@@ -15,6 +15,7 @@ import gsik
 from gsik.humanoid.bones import POLE_BONES
 from gsik_studio.model import Document
 from gsik_studio.model.characters import open_character
+from gsik_studio.model.pins import is_pinned
 from gsik_studio.model.pole_places import limb_of, pole_joints, swing_angle
 
 #: Every naming, with A and T rests across them.
@@ -83,6 +84,13 @@ def test_a_knee_pole_moved_sideways_swings_the_knee_and_nothing_pinned(doc, side
     assert swing_angle(limb, P0, doc.world_positions()) == pytest.approx(expected, abs=np.radians(1.0))
     for n in pinned:
         assert np.linalg.norm(doc.effector_poses()[n][:3, 3] - ends[n]) < 1e-4
+
+
+@pytest.mark.parametrize("naming", list(NAMINGS))
+def test_every_naming_opens_with_its_pelvis_and_feet_pinned_by_name(naming, blender_character):
+    """The studio pins ``pelvis`` and the feet by name: every naming's effectors carry the biped's names."""
+    doc = Document(open_character(blender_character(Spec(naming, "A"))).skeleton)
+    assert {n for n, t in doc.targets.items() if is_pinned(t)} == {"pelvis", "left_foot"}  # the right foot: root
 
 
 def test_a_skeleton_that_is_no_humanoid_gets_no_poles():

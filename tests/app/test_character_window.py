@@ -83,7 +83,7 @@ def test_the_characters_skinned_body_is_drawn_framed_and_follows_a_drag(qtbot, c
     P = doc.world_positions()[doc.skeleton.joint_frame]
     assert len(got["bones"]) == len(character.file.skins[character.skin].joints)
     for bone, head in zip(got["bones"], got["pose_heads"]):
-        np.testing.assert_allclose(head, P[doc.skeleton.joint_names.index(bone)], atol=2e-5, err_msg=bone)
+        np.testing.assert_allclose(head, P[character.file_names.index(bone)], atol=2e-5, err_msg=bone)
 
 
 def test_the_biped_opens_framed_whole_from_every_preset_view(window):

@@ -26,15 +26,17 @@ def test_skin_joints_become_ball_joints_at_the_files_rest(spec, blender_characte
     character = read_character(path)
     sk = character.skeleton
     skin_names = [character.file.nodes[n].name for n in character.file.skins[character.skin].joints]
-    assert set(skin_names) <= set(sk.joint_names)
+    assert set(skin_names) <= set(character.file_names)
     for name in skin_names:
-        dofs = sk.joint_dofs[sk.joint_names.index(name)]
-        assert [sk.dof_names[d] for d in dofs] == [f"{name}.x", f"{name}.y", f"{name}.z"]
+        joint = sk.joint_names[character.file_names.index(name)]
+        assert joint == (f"{name}_joint" if name in EFFECTOR_BONES else name)  # Unreal's head and pelvis
+        dofs = sk.joint_dofs[sk.joint_names.index(joint)]
+        assert [sk.dof_names[d] for d in dofs] == [f"{joint}.x", f"{joint}.y", f"{joint}.z"]
     # the rest pose (all angles 0) puts every joint where Blender's importer puts the bone's head
     blender = blender_read(path)
     at_rest = sk.frame_transforms(np.zeros(sk.n_dofs))[sk.joint_frame][:, :3, 3]
     heads = dict(zip(blender["bones"], blender["rest_heads"]))
-    for j, name in enumerate(sk.joint_names):
+    for j, name in enumerate(character.file_names):
         if name in heads:
             np.testing.assert_allclose(at_rest[j], heads[name], atol=1e-5, err_msg=name)
 
@@ -50,7 +52,7 @@ def test_recognition_places_effectors_root_and_poles(spec, blender_character):
         site = character.effectors[effector]
         assert site in sk.effector_sites
         parent = sk.frame_parent[sk.site_frame[sk.site_names.index(site)]]
-        assert sk.joint_frame[sk.joint_names.index(name(bone))] == parent, effector
+        assert sk.joint_frame[character.file_names.index(name(bone))] == parent, effector
     assert character.poles == {pole: name(bone) for pole, bone in POLE_BONES.items()}
 
 
@@ -60,7 +62,7 @@ def test_recognised_joints_get_human_ranges_and_the_rest_stay_at_rest(spec, blen
     sk = character.skeleton
     name = NAMINGS[spec.naming]
     recognised = {name(b) for b in LAYOUT}
-    for j, joint in enumerate(sk.joint_names[1:], start=1):
+    for j, joint in enumerate(character.file_names[1:], start=1):
         ranges = sk.upper[list(sk.joint_dofs[j])] - sk.lower[list(sk.joint_dofs[j])]
         if joint in recognised:
             assert np.all(ranges > 0) and np.all(ranges <= 2 * math.pi), joint
@@ -121,3 +123,51 @@ def test_an_external_buffer_is_read_from_the_files_folder(blender_character, tmp
     assert (tmp_path / (source.stem + ".bin")).exists()
     file = read_gltf(tmp_path / source.name)
     assert file.buffers and len(file.buffers[0]) == file.document.buffers[0].byteLength
+
+
+@pytest.mark.parametrize("naming", list(NAMINGS))
+def test_every_naming_has_the_biped_s_effector_names(naming, blender_character):
+    """Unreal's ``head`` and ``pelvis`` bones once gave ``head_site``/``pelvis_site``: now every naming's effectors
+    are the biped's (``head``, ``pelvis``, ``left_hand`` ...); a bone named so is the joint ``<name>_joint``."""
+    character = read_character(blender_character(Spec(naming, "A")))
+    sk = character.skeleton
+    assert dict(character.effectors) == {e: e for e in EFFECTOR_BONES}
+    assert set(sk.effector_sites) == set(EFFECTOR_BONES)
+    renamed = {f: j for f, j in zip(character.file_names, sk.joint_names) if f != j}
+    assert renamed == ({"pelvis": "pelvis_joint", "head": "head_joint"} if naming == "unreal" else {})
+    assert character.recognition.bones["head"] == renamed.get("head", NAMINGS[naming]("head"))
+
+
+def test_a_pose_file_with_the_old_unreal_names_still_reads(blender_character, tmp_path):
+    """A pose (with a clip) saved when the Unreal character's effectors were ``head_site``/``pelvis_site`` and its
+    joints ``head``/``pelvis`` reads as the same pose on today's names; a name that is neither is still refused."""
+    from gsik.io.pose import Clip, Pose, pose_to_yaml, read_pose
+
+    character = read_character(blender_character(Spec("unreal", "A")))
+    sk = character.skeleton
+    solver = gsik.Solver(sk)
+    q = np.clip(np.linspace(-0.3, 0.3, sk.n_dofs), sk.lower, sk.upper)
+    W = solver.world_from_root
+    targets = {n: gsik.Target.from_transform(T) for n, T in solver.effector_poses().items()}
+    pose = Pose(sk.name, sk.root, tuple(W[:3, 3]), (1.0, 0.0, 0.0, 0.0), dict(zip(sk.dof_names, q.tolist())),
+                targets)
+    clip = Clip("c", Motion(sk, np.stack([q, q]), (sk.root,) * 2, np.stack([W, W]), 1 / 30))
+    text = pose_to_yaml(pose, clip=clip, skeleton=sk)
+    old = text
+    for name in ("head", "pelvis"):
+        old = old.replace(f"{name}_joint.", f"{name}.").replace(f"  {name}:", f"  {name}_site:")
+    assert old != text and "head_site:" in old and "pelvis.x" in old and "head_joint" not in old
+    (tmp_path / "old.yaml").write_text(old, encoding="utf-8")
+    got = read_pose(tmp_path / "old.yaml", sk)
+    assert got.pose == read_pose_text(text, sk, tmp_path).pose
+    np.testing.assert_array_equal(got.clip.motion.q, clip.motion.q)
+    (tmp_path / "bad.yaml").write_text(old.replace("head_site:", "neck_site:"), encoding="utf-8")
+    with pytest.raises(gsik.PoseError, match="unknown effector 'neck_site'"):
+        read_pose(tmp_path / "bad.yaml", sk)
+
+
+def read_pose_text(text, sk, folder):
+    from gsik.io.pose import read_pose
+
+    (folder / "new.yaml").write_text(text, encoding="utf-8")
+    return read_pose(folder / "new.yaml", sk)

@@ -11,8 +11,13 @@ Conventions:
 * **Humanoid.** :func:`gsik.humanoid.recognise` names the joints; the recognised ones get human ranges
   (:mod:`gsik.io.gltf.ranges`), every other joint (fingers, twist, face, props) zero ranges: it stays at its rest
   angles. Effector sites ``head``, ``pelvis``, ``left_hand``, ``right_hand``, ``left_foot``, ``right_foot`` sit
-  at their joints (a joint already holding the name gives the site ``<name>_site``); the IK root is the right
-  foot; :attr:`Character.poles` names the knee and elbow joints for pole targets.
+  at their joints, named so for every naming (the biped's names: the studio pins the pelvis and feet by them, and
+  poses move between characters); the IK root is the right foot; :attr:`Character.poles` names the knee and elbow
+  joints for pole targets.
+* **Names.** A gsik joint has its node's name, except a node named like an effector (Unreal's ``head`` and
+  ``pelvis``): its joint is ``<name>_joint`` (:data:`gsik.io.names.RENAMED_JOINT`); the file keeps its name
+  (gsik writes by node, :attr:`Character.file_names`). Pose files of older gsik, which named those effectors
+  ``<name>_site`` and kept the joint's name, still read (:mod:`gsik.io.pose.legacy`).
 * **Units and axes.** Metres; the file's y-up world turned to gsik's z up (:mod:`gsik.io.gltf.axes`), as Blender's
   importer does. Joints must have a uniform world scale.
 """
@@ -21,7 +26,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
 
 import numpy as np
@@ -32,7 +37,7 @@ from gsik.io.gltf.axes import gsik_from_gltf, node_world, rigid
 from gsik.io.gltf.model import GltfFile
 from gsik.io.gltf.ranges import RestFrame, joint_limits
 from gsik.io.gltf.read import read_gltf
-from gsik.io.names import unique_name
+from gsik.io.names import RENAMED_JOINT, unique_name
 from gsik.skeleton import JointSpec, RotationSpec, SegmentSpec, SiteSpec, Skeleton, build_skeleton
 
 #: Effector site -> the canonical (VRM) bone it sits on, in the order the skeleton lists them.
@@ -74,6 +79,12 @@ class Character:
     def name(self) -> str:
         return self.skeleton.name
 
+    @property
+    def file_names(self) -> tuple[str, ...]:
+        """The file's name (n_joints,) of each gsik joint's node (``"scene"`` for a made-up top): the joint's own
+        name but where the node's is an effector's (see :data:`gsik.io.names.RENAMED_JOINT`) or repeats another's."""
+        return tuple("scene" if n < 0 else self.file.nodes[n].name for n in self.joint_nodes)
+
 
 def read_character(path: str | os.PathLike, overrides: Mapping[str, str] | None = None) -> Character:
     """Read a skinned glTF character (``.glb``/``.gltf``) and make it a posable gsik skeleton.
@@ -96,8 +107,8 @@ def character_from_file(file: GltfFile, overrides: Mapping[str, str] | None = No
     skin = _main_skin(file)
     world = node_world(file.nodes)
     b = _Builder(file, skin, gsik_from_gltf(world))
-    rig = Rig(tuple(b.names[1:]), tuple(p - 1 for p in b.parents[1:]), b.positions[1:].copy())
-    recognition = recognise(rig, overrides)
+    rig = Rig(b.file_names[1:], tuple(p - 1 for p in b.parents[1:]), b.positions[1:].copy())
+    recognition = _on_joints(recognise(rig, overrides), dict(zip(b.file_names, b.names)))
     b.add_joints(recognition)
     effectors = b.add_effectors(recognition)
     name = os.path.splitext(os.path.basename(file.path))[0] or "gltf"
@@ -106,9 +117,14 @@ def character_from_file(file: GltfFile, overrides: Mapping[str, str] | None = No
     poles = {pole: recognition.bones[bone] for pole, bone in POLE_BONES.items() if bone in recognition.bones}
     world.flags.writeable = False
     node_of = dict(zip(b.names, b.nodes))  # the builder orders joints its own way
-    return Character(file, skeleton, skin, tuple(node_of[n] for n in skeleton.joint_names), recognition, MappingProxyType(effectors),
-                     MappingProxyType(poles), world,
-                     np.zeros(skeleton.n_dofs))
+    return Character(file, skeleton, skin, tuple(node_of[n] for n in skeleton.joint_names), recognition,
+                     MappingProxyType(effectors), MappingProxyType(poles), world, np.zeros(skeleton.n_dofs))
+
+
+def _on_joints(recognition, joint_of: Mapping[str, str]):
+    """``recognition`` (made on the file's names) with the gsik joints' names (:data:`RENAMED_JOINT`)."""
+    return replace(recognition, bones=MappingProxyType({b: joint_of[j] for b, j in recognition.bones.items()}),
+                   ignored=MappingProxyType({joint_of[j]: why for j, why in recognition.ignored.items()}))
 
 
 def _main_skin(file: GltfFile) -> int:
@@ -146,6 +162,8 @@ class _Builder:
         for n in self.nodes:
             self.names.append(unique_name("scene" if n < 0 else file.nodes[n].name, taken))
             taken.add(self.names[-1])
+        self.file_names = tuple(self.names)  # what recognition reads
+        self.names = [unique_name(RENAMED_JOINT.format(n), taken) if n in EFFECTOR_BONES else n for n in self.names]
         self.specs: list[JointSpec] = []
         self.sites: list[SiteSpec] = []
 
@@ -200,14 +218,10 @@ class _Builder:
 
     def add_effectors(self, recognition) -> dict[str, str]:
         """A site per effector at its recognised joint; returns effector -> site name."""
-        taken = set(self.names)
         effectors = {}
-        for effector, bone in EFFECTOR_BONES.items():
-            joint = recognition.joint(bone)
-            site = unique_name(effector if effector not in taken else f"{effector}_site", taken)
-            taken.add(site)
-            self.sites.append(SiteSpec(site, joint, (0.0, 0.0, 0.0)))
-            effectors[effector] = site
+        for effector, bone in EFFECTOR_BONES.items():  # no joint has an effector's name (RENAMED_JOINT)
+            self.sites.append(SiteSpec(effector, recognition.joint(bone), (0.0, 0.0, 0.0)))
+            effectors[effector] = effector
         return effectors
 
     def segments(self) -> list[SegmentSpec]:

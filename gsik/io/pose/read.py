@@ -9,7 +9,7 @@ from typing import Any, NamedTuple
 from gsik.errors import PoseError, choices, show_value
 from gsik.io.files import read_text
 from gsik.io.yaml_safe import MAX_BYTES, load_yaml
-from gsik.io.pose import sequence
+from gsik.io.pose import legacy, sequence
 from gsik.io.pose.model import (LIMIT_TOLERANCE, POSE_FORMAT, QUATERNION_NORM_TOLERANCE, SKELETON_FILE_SUFFIXES,
                                _CLIP_KEY, _KEYS_KEY, _LIBRARY_KEY, _OPTIONAL_TOP_KEYS, _POLES_KEY, _POSE_KEYS,
                                _TARGET_KEYS, _TOP_KEYS, _TRANSFORM_KEYS, Pose, PoseRead)
@@ -254,6 +254,7 @@ def _read_joints(r: _Reader, joints_in, skeleton: Skeleton, at: tuple = ()) -> t
     here = at + ("joints",)
     if not isinstance(joints_in, dict):
         r.fail(here, f"must be a mapping of DOF name to angle [rad], got {_show(joints_in)}")
+    joints_in = legacy.joints(joints_in, skeleton.dof_names)
     _require_names(r, joints_in, here, skeleton.dof_names, ("joint", "angle"))
     joints, warnings = {}, []
     for i, dof in enumerate(skeleton.dof_names):
@@ -274,6 +275,7 @@ def _read_targets(r: _Reader, targets_in, effectors: tuple[str, ...], root: str,
     here = at + ("targets",)
     if not isinstance(targets_in, dict):
         r.fail(here, f"must be a mapping of effector name to target, got {_show(targets_in)}")
+    targets_in = legacy.targets(targets_in, effectors)
     _require_names(r, targets_in, here, effectors, ("effector", "target"),
                    lambda key: " (it is the IK root)" if key == root else "")
     return {eff: _read_target(r, targets_in[eff], here + (eff,)) for eff in effectors}

@@ -15,6 +15,7 @@ import numpy as np
 
 from gsik.anim.motion import FRAME_TIME_RANGE, Motion
 from gsik.errors import PoseError, choices, show_value
+from gsik.io.pose import legacy
 from gsik.io.pose.model import (_CLIP_FRAME_KEYS, _CLIP_KEY, _CLIP_KEYS, _KEY_SEQUENCE_KEYS, _KEYS_KEY, _POLE_KEYS,
                                _POLES_KEY, _POSE_KEYS, MAX_FPS, MIN_FPS, Clip, KeySequence, Pole, Pose)
 from gsik.io.yaml_safe import yaml_string
@@ -84,7 +85,7 @@ def read_clip(r: _Reader, value, skeleton: Skeleton) -> Clip:
     if not FRAME_TIME_RANGE[0] <= frame_time <= FRAME_TIME_RANGE[1]:
         r.fail(at + ("frame_time",), f"must be from {FRAME_TIME_RANGE[0]:g} to {FRAME_TIME_RANGE[1]:g} seconds, got "
                                      f"{frame_time!r}")
-    dofs = r.items(c["dofs"], at + ("dofs",), "DOF names")
+    dofs = legacy.dof_list(r.items(c["dofs"], at + ("dofs",), "DOF names"), skeleton.dof_names)
     if tuple(dofs) != skeleton.dof_names:
         r.fail(at + ("dofs",), f"must list the skeleton's {skeleton.n_dofs} DOFs in its order: "
                                f"{choices(skeleton.dof_names)}")
