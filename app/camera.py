@@ -46,10 +46,9 @@ def box_corners(bounds) -> np.ndarray:
 
 def body_extent(body) -> np.ndarray:
     """The corners (k, 3) [m] of the boxes of a drawn body's meshes (each with a ``polydata``); none while the
-    body is hidden (sticks)."""
-    if not body.visible:
-        return np.zeros((0, 3))
-    return np.vstack([box_corners(m.polydata.bounds) for m in body.meshes])
+    body is hidden (sticks), none of an empty mesh."""
+    boxes = [box_corners(m.polydata.bounds) for m in body.meshes if m.polydata.n_points] if body.visible else []
+    return np.vstack(boxes) if boxes else np.zeros((0, 3))  # an empty mesh's VTK bounds are +-1e299
 
 
 def _camera_axes(cam) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -65,7 +64,7 @@ def _camera_axes(cam) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.cross(up, back), up, back
 
 
-def frame_points(plotter, points: np.ndarray, margin: float = FRAME_MARGIN, least: float = 0.5) -> None:
+def frame_points(plotter, points: np.ndarray, margin: float = FRAME_MARGIN, least: float = 0.02) -> None:
     """Fit ``points`` (k, 3) [m] in the view, keeping the viewing direction; ``least`` [m] is the
     smallest camera distance (and, halved, the smallest orthographic half-height)."""
     cam = plotter.camera

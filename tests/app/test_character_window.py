@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from typing import NamedTuple
 
 import numpy as np
 import pytest
@@ -94,6 +95,35 @@ def test_the_biped_opens_framed_whole_from_every_preset_view(window):
         window.set_view(view)
         xy = _projected(window, np.vstack([m.polydata.points for m in window.body.mannequin.meshes]))
         assert np.abs(xy).max() < 1.0, (view, np.abs(xy).max(axis=0))
+
+
+@pytest.mark.parametrize("height", [0.15, 1.8, 40.0])
+def test_a_body_of_any_height_is_framed_whole_from_every_preset_view(window, height):
+    """Framing fits any size: a standing body's box (a tenth as wide as tall, arms out to 0.9 of its height)."""
+    from gsik_studio import camera
+
+    box = camera.box_corners((-0.45 * height, 0.45 * height, -0.1 * height, 0.1 * height, 0.0, height))
+    for view in camera.VIEWS:
+        camera.set_view(window.plotter, view, box)
+        xy = _projected(window, box)
+        assert np.abs(xy).max() < 1.0 and np.abs(xy).max() > 0.5, (view, np.abs(xy).max(axis=0))
+
+
+def test_an_empty_mesh_adds_nothing_to_the_framed_extent():
+    """VTK gives an empty mesh the bounds +-1e299: framing them sent the camera out of the world."""
+    import pyvista as pv
+
+    from gsik_studio.camera import body_extent
+
+    class Body(NamedTuple):
+        meshes: tuple
+        visible: bool = True
+
+    Mesh = NamedTuple("Mesh", [("polydata", object)])
+    one = Mesh(pv.PolyData(np.array([[0.0, 0.0, 0.0], [1.0, 2.0, 3.0]])))
+    got = body_extent(Body((Mesh(pv.PolyData()), one)))
+    assert got.shape == (8, 3) and got.min() == 0.0 and got.max() == 3.0
+    assert body_extent(Body((one,), visible=False)).shape == (0, 3)
 
 
 def test_a_bad_character_changes_nothing(qtbot, window, boxes, tmp_path):
