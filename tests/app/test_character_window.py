@@ -134,7 +134,7 @@ def test_a_bad_character_changes_nothing(qtbot, window, boxes, tmp_path):
     assert window.doc is doc and "child twice" in str(boxes["critical"][-1])
 
 
-def test_a_characters_knee_pole_dragged_with_the_mouse_swings_the_knee(qtbot, window, blender_character):
+def test_a_characters_knee_pole_dragged_with_the_mouse_swings_the_knee(qtbot, window, blender_character, tmp_path):
     from test_artist_gui import _click_widget, _press_drag_release, _settle
 
     from gsik_studio.model.characters import character_of
@@ -150,6 +150,7 @@ def test_a_characters_knee_pole_dragged_with_the_mouse_swings_the_knee(qtbot, wi
     knee = character.poles["left_knee"]  # the character's own joint, mixamorig:LeftLeg
     assert set(doc.controls.poles) == set(character.poles.values()) and knee in window.poles.widgets
     _settle(qtbot, window)
+    assert window.grab_window().save(str(tmp_path / "poles.png"))  # looked at by hand: drawn as the biped's
     P0, pole = doc.world_positions(), doc.controls.poles[knee].position.copy()
     at = doc.effector_poses()[pelvis][:3, 3].copy()
     xy = window.rings.project(pole[None])[0]
