@@ -62,7 +62,7 @@ def test_the_characters_skinned_body_is_drawn_framed_and_follows_a_drag(qtbot, c
     assert np.abs(xy).max() < 1.0, f"the body is cropped: view coordinates up to {np.abs(xy).max(axis=0)}"
     assert np.ptp(xy[:, 1]) > 0.8, "the body is framed too small"
     shot = tmp_path / f"{character.name}.png"
-    assert window.grab_window().save(str(shot))  # looked at by hand: see the README's glTF workflow
+    assert window.grab_window().save(str(shot))  # kept in the test folder to look at (body whole, lit, framed)
     name = character.effectors["left_hand"]
     start = np.array(doc.targets[name].position)
     hand = doc.effector_poses()[name][:3, 3].copy()
