@@ -87,7 +87,7 @@ class AttemptPolicy:
         the further ones the settings and its outcome call for; the best one is left as the state."""
         restarts = self._settings.restarts > 0
         start = self._q.copy()
-        self._work_done[:] = 0
+        self._work_done = [0, 0]
         stats = self._solve_from(start)
         attempts = 1
         if _status(stats) is not Status.CONVERGED and restarts:
@@ -215,19 +215,29 @@ class AttemptPolicy:
 
     def _count(self, stats: np.ndarray) -> np.ndarray:
         """Add an attempt's (or a stage's) work to ``_work_done``; returns ``stats``."""
-        self._work_done[0] += int(stats[O_ITERATIONS])
-        self._work_done[1] += int(stats[O_SWEEPS])
+        done = self._work_done
+        done[0] += int(stats[O_ITERATIONS])
+        done[1] += int(stats[O_SWEEPS])
         return stats
 
     def _kernel_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """The single-level attempt (:func:`gsik.kernels.solve.solve`) from ``q0``; a copy of its statistics."""
-        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
-        before = self._q.copy()
-        solve_kernels.solve(self._model, self._settings.kernel_settings(for_solve=True), self._packed,
-                            self._topo.root_frame, self._W, self._q, iterations, self._ws)
+        q, sk = self._q, self._skeleton
+        np.minimum(np.maximum(q0, sk.lower, out=q), sk.upper, out=q)  # np.clip's Python wrappers cost more
+        before = q.copy()
+        solve, inputs = self._solve_call or self._solve_inputs()
+        solve(*inputs, iterations, self._ws)
         if not self._ws.stats[O_FINITE]:
             self._refuse_non_finite(before, self._ws.stats)
         return self._ws.stats.copy()
+
+    def _solve_inputs(self) -> tuple:
+        """``(solve kernel, its arguments before the iterations and the workspace)``: persistent arrays, built once
+        per configuration as a step's (:meth:`~gsik.solver.Solver._kernel_inputs`)."""
+        inputs = (self._model, self._settings.kernel_settings(for_solve=True), self._packed, self._topo.root_frame,
+                  self._W, self._q)
+        self._solve_call = (kernels.compiled_entry(solve_kernels.solve, *inputs, 0, self._ws), inputs)
+        return self._solve_call
 
     def _reaches_first(self) -> bool:
         """True if a prioritised attempt may meet its targets on the single-level path first: a posture is the

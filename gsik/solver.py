@@ -79,7 +79,7 @@ class Solver(AttemptPolicy):
         self._targets: dict[str, Target] = {}
         self._settled = None  # (what a solve depended on, its statistics) after a solve ended at a best reach
         self._warm = None  # (angles, posture) a solve converged to: a solve starting there is warm
-        self._work_done = np.zeros(2, dtype=np.int64)  # linearisations and sweeps of the current solve
+        self._work_done = [0, 0]  # linearisations and sweeps of the current solve
         self._posture: control.Posture | None = None
         self._balance = False
         self._controller: control.Controller | None = None  # None: to be made (or retargeted) before use
@@ -134,16 +134,35 @@ class Solver(AttemptPolicy):
         self._q_before = np.empty(sk.n_dofs)  # a prioritised step's starting angles, to undo a non-finite one
         self._ws = kernels.make_workspace(sk.n_frames, sk.n_dofs, m, err=self._state[sk.n_dofs:].reshape(2, m))
         self._ws.lam[0] = lam
-        self._inputs = None
+        self._inputs = self._solve_call = None  # the kernels' cached calls: made again at first use
+        self._row_of = {name: k for k, name in enumerate(self._topo.effector_names)}
+        self._layout = None  # the targets' layout the packed rows hold: None packs every row again
+        fk = (self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
+        self._fk_call = (kernels.compiled_entry(forward_kinematics, *fk), fk)
         self._refresh_frames()
         self._pack_targets()
 
     def _refresh_frames(self) -> None:
-        forward_kinematics(self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
+        fk, inputs = self._fk_call
+        fk(*inputs)
 
     def _pack_targets(self) -> None:
+        """The targets into the kernels' rows. When only their positions and orientations changed since the last
+        packing (a drag's every frame: same names, weights, position-only flags and priorities), only those are
+        written; the rows without a target keep what the last full packing put there (weight 0: unused)."""
         self._controller = None
-        self._is_controlled = self._posture is not None or self._balance or self._controlled_targets()
+        layout = tuple([(name, t.weight, t.position_only, t.priority) for name, t in self._targets.items()])
+        if layout == self._layout:
+            tp, tR = self._packed.position, self._packed.rotation
+            for name, t in self._targets.items():
+                k = self._row_of.get(name)
+                if k is not None:
+                    tp[k] = t.position
+                    tR[k] = t.rotation
+            self._is_controlled = self._posture is not None or self._balance or self._layout_controlled
+            return
+        self._layout, self._layout_controlled = layout, self._controlled_targets()
+        self._is_controlled = self._posture is not None or self._balance or self._layout_controlled
         ow = self._settings.orientation_weight
         tp, tR, row_w = self._packed
         row_w[:] = 0.0
@@ -203,8 +222,9 @@ class Solver(AttemptPolicy):
     def configure(self, **changes) -> None:
         """Change settings by name (validated); unknown names raise :class:`SolverError`."""
         self._settings = self._make_settings(self._settings, changes)
-        self._inputs = None
+        self._inputs = self._solve_call = None  # the kernels' cached calls: made again at first use
         self._ws.lam[0] = self._settings.damping
+        self._layout = None  # the orientation weight may have changed: pack every row again
         self._pack_targets()
 
     def set_q(self, q) -> None:
@@ -266,7 +286,7 @@ class Solver(AttemptPolicy):
         self._pack_targets()
 
     def _check_targets(self, targets: Mapping[str, Target | None]) -> dict[str, Target]:
-        if not isinstance(targets, Mapping):
+        if type(targets) is not dict and not isinstance(targets, Mapping):
             raise TargetError(f"targets must be a mapping of effector name to Target, got {type(targets).__name__}")
         out = {}
         for name, t in targets.items():
