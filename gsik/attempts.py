@@ -215,21 +215,22 @@ class AttemptPolicy:
 
     def _count(self, stats: np.ndarray) -> np.ndarray:
         """Add an attempt's (or a stage's) work to ``_work_done``; returns ``stats``."""
-        done = self._work_done
-        done[0] += int(stats[O_ITERATIONS])
-        done[1] += int(stats[O_SWEEPS])
+        done, counts = self._work_done, stats.tolist()  # Python floats: cheaper to read than NumPy scalars
+        done[0] += int(counts[O_ITERATIONS])
+        done[1] += int(counts[O_SWEEPS])
         return stats
 
     def _kernel_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """The single-level attempt (:func:`gsik.kernels.solve.solve`) from ``q0``; a copy of its statistics."""
-        q, sk = self._q, self._skeleton
-        np.minimum(np.maximum(q0, sk.lower, out=q), sk.upper, out=q)  # np.clip's Python wrappers cost more
-        before = q.copy()
+        if q0 is self._q:
+            q0 = q0.copy()  # kept: a refused attempt goes back to it
+        self._q[:] = q0  # the kernel clamps it into the limits (cheaper there than np.clip here)
         solve, inputs = self._solve_call or self._solve_inputs()
         solve(*inputs, iterations, self._ws)
-        if not self._ws.stats[O_FINITE]:
-            self._refuse_non_finite(before, self._ws.stats)
-        return self._ws.stats.copy()
+        stats = self._ws.stats
+        if not stats[O_FINITE]:
+            self._refuse_non_finite(np.clip(q0, self._skeleton.lower, self._skeleton.upper), stats)
+        return stats.copy()
 
     def _solve_inputs(self) -> tuple:
         """``(solve kernel, its arguments before the iterations and the workspace)``: persistent arrays, built once
