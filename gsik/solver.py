@@ -137,14 +137,11 @@ class Solver(AttemptPolicy):
         self._inputs = self._solve_call = None  # the kernels' cached calls: made again at first use
         self._row_of = {name: k for k, name in enumerate(self._topo.effector_names)}
         self._layout = None  # the targets' layout the packed rows hold: None packs every row again
-        fk = (self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
-        self._fk_call = (kernels.compiled_entry(forward_kinematics, *fk), fk)
         self._refresh_frames()
         self._pack_targets()
 
     def _refresh_frames(self) -> None:
-        fk, inputs = self._fk_call
-        fk(*inputs)
+        forward_kinematics(self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
 
     def _pack_targets(self) -> None:
         """The targets into the kernels' rows. When only their positions and orientations changed since the last
