@@ -235,10 +235,16 @@ class AttemptPolicy:
     def _solve_inputs(self) -> tuple:
         """``(solve kernel, its arguments before the iterations and the workspace)``: persistent arrays, built once
         per configuration as a step's (:meth:`~gsik.solver.Solver._kernel_inputs`)."""
-        inputs = (self._model, self._settings.kernel_settings(for_solve=True), self._packed, self._topo.root_frame,
-                  self._W, self._q)
+        settings = self._settings.kernel_settings(for_solve=True)._replace(positions_first=self._stages_positions())
+        inputs = (self._model, settings, self._packed, self._topo.root_frame, self._W, self._q)
         self._solve_call = (kernels.compiled_entry(solve_kernels.solve, *inputs, 0, self._ws), inputs)
         return self._solve_call
+
+    def _stages_positions(self) -> bool:
+        """True if a solve's attempts meet the positions first: ``positions_first`` is on and the skeleton has
+        more than one effector (a single chain goes for every row at once: fewer linearisations, see
+        :class:`~gsik.settings.SolverSettings`)."""
+        return self._settings.positions_first and len(self._topo.effector_names) > 1
 
     def _reaches_first(self) -> bool:
         """True if a prioritised attempt may meet its targets on the single-level path first: a posture is the
@@ -303,7 +309,7 @@ class AttemptPolicy:
         :data:`~gsik.kernels.solve.STAGE_ANGLE`, prioritised steps on the positions alone (every level's
         orientation rows off), as a plain attempt's first phase, for at most
         :data:`~gsik.kernels.solve.POSITION_PHASE_SHARE` of ``iterations``; returns the steps made."""
-        if not (self._settings.positions_first and iterations) or \
+        if not (self._stages_positions() and iterations) or \
                 c.errors(self._ws.R, self._ws.p)[1].max(initial=0.0) <= solve_kernels.STAGE_ANGLE:
             return 0
         tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)
