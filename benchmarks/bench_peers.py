@@ -12,8 +12,11 @@ joint ranges), read by both peers. Two measures, each with 6-DOF targets and wit
   Figures: median µs per solve (the target's setting and every check included), median iterations (gsik:
   linearisations of all its attempts), share solved; and the median µs over the problems both solved.
 - **Chain tracking**: a target going once round a 0.1 m circle through the effector's rest position (in the
-  sagittal plane, the rest orientation kept) over ``--frames`` frames, one step per frame: gsik ``Solver.step()``
-  with a new ``Target``, placo one ``update_kinematics()`` and ``solve(True)`` after setting the task's target.
+  sagittal plane, the rest orientation kept) over ``--frames`` frames, one step per frame, each peer through the
+  per-frame calls a user would make: gsik ``Solver.move_target(name, position[, rotation])`` (the target set once
+  before the first frame, moved in place after) and ``Solver.step()``, placo setting the task's target, one
+  ``solve(True)`` and ``update_kinematics()``. A gsik without ``move_target`` (an older one, through
+  ``PYTHONPATH``) steps with a new ``Target`` a frame: ``Solver.step({name: Target(...)})``.
   Figures: median µs per frame, frames whose effector ends within 1 mm of the target, the largest miss.
 
 placo is an optional peer (``pip install placo``, or the ``peers`` extra); without it the benchmark says why and
@@ -111,12 +114,21 @@ class GsikPeer:
     def track(self, circle: list[np.ndarray], position_only: bool) -> tuple[list[float], list[float]]:
         """From the bent pose, one step a frame towards each pose of ``circle``: (µs, miss [m]) per frame."""
         self.solver.set_q(self.bent)
-        self.solver.set_targets({})
         solver, name, us, miss = self.solver, self.effector, [], []
+        moves = hasattr(solver, "move_target")
+        first = circle[0]
+        solver.set_targets({name: gsik.Target(first[:3, 3]) if position_only else gsik.Target.from_transform(first)})
         for T in circle:
             p, R = T[:3, 3], T[:3, :3]
             start = time.perf_counter_ns()
-            r = solver.step({name: gsik.Target(p) if position_only else gsik.Target(p, R)})
+            if not moves:
+                r = solver.step({name: gsik.Target(p) if position_only else gsik.Target(p, R)})
+            else:
+                if position_only:
+                    solver.move_target(name, p)
+                else:
+                    solver.move_target(name, p, R)
+                r = solver.step()
             us.append((time.perf_counter_ns() - start) * 1e-3)
             miss.append(float(r.position_errors[0]))
         return us, miss
