@@ -132,7 +132,7 @@ class Solver(TargetSetting, AttemptPolicy):
         self._q_before = np.empty(sk.n_dofs)  # a prioritised step's starting angles, to undo a non-finite one
         self._ws = kernels.make_workspace(sk.n_frames, sk.n_dofs, m, err=self._state[sk.n_dofs:].reshape(2, m))
         self._ws.lam[0] = lam
-        self._inputs = self._solve_call = None  # the kernels' cached calls: made again at first use
+        self._inputs = self._solve_call = self._move_row = None  # the kernels' cached calls: made at first use
         self._row_of = {name: k for k, name in enumerate(self._topo.effector_names)}
         self._layout = None  # the targets' layout the packed rows hold: None packs every row again
         self._refresh_frames()

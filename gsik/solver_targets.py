@@ -6,13 +6,23 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import numpy as np
+
+from gsik import kernels
 from gsik.errors import TargetError, choices
-from gsik.targets import PACK3_INTO, PACK9_INTO, Target, checked_position, checked_rotation
+from gsik.kernels.targets import WRITTEN, move_row
+from gsik.targets import (EXACT_ROTATION, MAX_COORDINATE, PACK3_INTO, PACK9_INTO, Target, checked_position,
+                          checked_rotation)
 
 #: Most enabled targets a solver takes at once (a tracked 100-joint clip uses about 200).
 MAX_TARGETS = 512
 #: Most distinct priority levels among them.
 MAX_PRIORITY_LEVELS = 16
+#: A moved target's rotation argument for "keep the row's rotation" (shape (0, 0)), and float64.
+_KEEP = np.zeros((0, 0))
+_F8 = np.dtype(np.float64)
+#: Arrays of any layout (a column of a transform is strided): what the compiled entry is made for.
+_ANY_VECTOR, _ANY_MATRIX = np.zeros((3, 2))[:, 0], np.zeros((3, 6))[:, ::2]
 
 
 class TargetSetting:
@@ -25,10 +35,14 @@ class TargetSetting:
 
     @property
     def _targets(self) -> dict[str, Target]:
-        """The enabled targets by name, the moves made since they were last read included."""
+        """The enabled targets by name, the moves made since they were last read included (their positions and
+        rotations are in the packed rows)."""
         if self._moved:
-            for name, (xyz, q, rows) in self._moved.items():
-                self._target_map[name] = self._target_map[name]._moved_to(xyz, q, rows)
+            tp, tR = self._packed.position, self._packed.rotation
+            for name, (q, turned) in self._moved.items():
+                k = self._row_of[name]
+                rows = tuple(tR[k].ravel().tolist()) if turned else None
+                self._target_map[name] = self._target_map[name]._moved_to(tuple(tp[k].tolist()), q, rows)
             self._moved.clear()
         return self._target_map
 
@@ -80,8 +94,22 @@ class TargetSetting:
                 orientation that ``Target`` refuses (NaN, infinite, not a rotation ...). Nothing changes when it
                 raises.
         """
-        old = self._target_map.get(name)
-        if old is None:
+        k = self._row_of.get(name) if name in self._target_map else None
+        if k is not None and not self._is_controlled and type(position) is np.ndarray and position.dtype is _F8 \
+                and position.shape == (3,) and (orientation is None or (
+                    type(orientation) is np.ndarray and orientation.dtype is _F8 and orientation.shape == (3, 3))):
+            # The usual frame: float arrays that pass Target's checks as they are go straight into the row.
+            move = self._move_row or self._make_move_row()
+            turned = orientation is not None
+            if move(position, orientation if turned else _KEEP, MAX_COORDINATE, EXACT_ROTATION, self._packed.position,
+                    self._packed.rotation, k) == WRITTEN:
+                self._moved[name] = (None, True) if turned else self._moved.get(name, (None, False))
+                return
+        self._move_checked(name, position, orientation)
+
+    def _move_checked(self, name: str, position, orientation) -> None:
+        """:meth:`move_target` for any input: checked as :class:`Target` checks it, or refused."""
+        if name not in self._target_map:
             self._check_target_name(name)
             raise TargetError(f"{name!r} has no target to move; set one first (set_target or set_targets); "
                               f"targets: {choices(self._target_map)}")
@@ -99,9 +127,13 @@ class TargetSetting:
         PACK3_INTO(self._packed.position, 24 * k, *xyz)
         if rows is not None:
             PACK9_INTO(self._packed.rotation, 72 * k, *rows)
-        elif name in self._moved:  # moved again, the orientation kept: the last move's
-            q, rows = self._moved[name][1:]
-        self._moved[name] = (xyz, q, rows)
+        self._moved[name] = (q, True) if rows is not None else self._moved.get(name, (None, False))
+
+    def _make_move_row(self):
+        """:func:`gsik.kernels.targets.move_row`'s compiled entry (any layout of the given arrays), kept."""
+        rows = self._packed
+        self._move_row = kernels.compiled_entry(move_row, _ANY_VECTOR, _ANY_MATRIX, 0.0, 0.0, rows.position, rows.rotation, 0)
+        return self._move_row
 
     def _check_targets(self, targets: Mapping[str, Target | None]) -> dict[str, Target]:
         if type(targets) is not dict and not isinstance(targets, Mapping):

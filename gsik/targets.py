@@ -22,6 +22,9 @@ QUATERNION_TOLERANCE = ROTATION_TOLERANCE * 100
 MAX_COORDINATE = 1e6
 #: Largest target weight [-].
 MAX_WEIGHT = 1e6
+#: Columns of a target matrix orthonormal within this [-] keep it as given; farther off (up to
+#: ``ROTATION_TOLERANCE``) it is re-orthonormalised.
+EXACT_ROTATION = 1e-12
 #: The identity orientation (w, x, y, z): what a target made without an orientation holds.
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
 # Fields in value order: equality, hashing and replace() all walk this one list.
@@ -284,7 +287,7 @@ def _from_matrix(a: np.ndarray) -> tuple[None, tuple[float, ...]]:
         if not all(math.isfinite(v) for row in m for v in row):
             raise TargetError(f"target orientation must be finite, got {m}")
         raise TargetError("target orientation is not a rotation matrix (must be orthonormal with determinant +1)")
-    if off > 1e-12:
+    if off > EXACT_ROTATION:
         # Re-orthonormalise what is visibly off, so the kernels' log map sees an exact rotation.
         u, _, vt = np.linalg.svd(a)
         (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = (u @ vt).tolist()

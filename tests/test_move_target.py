@@ -40,15 +40,25 @@ def _same(a: gsik.SolveResult, b: gsik.SolveResult) -> None:
     assert (a.status, a.iterations, a.sweeps, a.residual) == (b.status, b.iterations, b.sweeps, b.residual)
 
 
-@pytest.mark.parametrize("kind", ["matrix", "quaternion", "position"])
+def _orientation(kind: str, T: np.ndarray):
+    """The orientation of ``T`` (4, 4) as a move is given it: a matrix (also slightly off orthonormal, or as
+    lists), a quaternion, or None (position only)."""
+    if kind == "nearly":  # within Target's tolerance but re-orthonormalised by it
+        return T[:3, :3] * (1.0 + 1e-9)
+    if kind == "lists":
+        return T[:3, :3].tolist()
+    return {"matrix": T[:3, :3], "quaternion": Target.from_transform(T).orientation, "position": None}[kind]
+
+
+@pytest.mark.parametrize("kind", ["matrix", "nearly", "lists", "quaternion", "position"])
 def test_moving_steps_exactly_as_setting_the_replaced_target(arm, kind):
     moved, fresh = gsik.Solver(arm, q0=BENT), gsik.Solver(arm, q0=BENT)
     start = moved.effector_poses()["hand"]
     first = Target.from_transform(start, weight=2.0)
     moved.set_target("hand", first)
     for T in _circle(start):
-        orientation = {"matrix": T[:3, :3], "quaternion": Target.from_transform(T).orientation, "position": None}[kind]
-        moved.move_target("hand", T[:3, 3], orientation)
+        orientation = _orientation(kind, T)
+        moved.move_target("hand", T[:3, 3].tolist() if kind == "lists" else T[:3, 3], orientation)
         new = first.replace(position=T[:3, 3]) if orientation is None else \
             first.replace(position=T[:3, 3], orientation=orientation)
         _same(moved.step(), fresh.step({"hand": new}))
