@@ -128,6 +128,7 @@ class Solver(TargetSetting, AttemptPolicy):
         # q and the errors live in one buffer so a result copies them at once.
         self._state = np.zeros(sk.n_dofs + 2 * m)
         self._q = self._state[: sk.n_dofs]
+        self._result_ends = (sk.n_dofs, sk.n_dofs + m)  # where q, then the position errors end in _state
         self._q[:] = q
         self._q_before = np.empty(sk.n_dofs)  # a prioritised step's starting angles, to undo a non-finite one
         self._ws = kernels.make_workspace(sk.n_frames, sk.n_dofs, m, err=self._state[sk.n_dofs:].reshape(2, m))
@@ -309,12 +310,12 @@ class Solver(TargetSetting, AttemptPolicy):
     def _result(self, st: np.ndarray, residual_index: int, attempts: int) -> SolveResult:
         # q and the (2, m) errors share one buffer: one copy, three views the caller owns.
         out = self._state.copy()
-        n, m = self._q.shape[0], len(self._topo.effector_names)
+        n, nm = self._result_ends
         stats = st.tolist()
         # tuple.__new__: every field given, so NamedTuple's own __new__ (a Python call with defaults) is skipped.
         return _new_tuple(SolveResult, (out[:n], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
                                         int(stats[O_SWEEPS]), stats[residual_index], self._topo.effector_names,
-                                        out[n:n + m], out[n + m:], stats[O_STEP_NORM], attempts))
+                                        out[n:nm], out[nm:], stats[O_STEP_NORM], attempts))
 
     def set_root(self, name: str) -> None:
         """Make the joint or site ``name`` the IK root; the pose does not move.
