@@ -65,6 +65,7 @@ class AttemptPolicy:
             self.set_targets(targets)
         if q0 is not None:
             self.set_q(q0)
+        self._make_moved_targets()  # before a continuation stages other values in the packed rows
         if self._settled is not None and self._settled[0] == self._reach_key():
             return self._solve_result(self._settled[1], 1)  # nothing further can do better: no work
         stats, attempts = self._attempts()

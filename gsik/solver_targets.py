@@ -35,16 +35,20 @@ class TargetSetting:
 
     @property
     def _targets(self) -> dict[str, Target]:
-        """The enabled targets by name, the moves made since they were last read included (their positions and
-        rotations are in the packed rows)."""
+        """The enabled targets by name, the moves made since they were last read included."""
         if self._moved:
-            tp, tR = self._packed.position, self._packed.rotation
-            for name, (q, turned) in self._moved.items():
-                k = self._row_of[name]
-                rows = tuple(tR[k].ravel().tolist()) if turned else None
-                self._target_map[name] = self._target_map[name]._moved_to(tuple(tp[k].tolist()), q, rows)
-            self._moved.clear()
+            self._make_moved_targets()
         return self._target_map
+
+    def _make_moved_targets(self) -> None:
+        """The :class:`Target` of each target moved since the targets were last read, from its packed row: called
+        before anything stages other values in the rows (a solve's continuation)."""
+        tp, tR = self._packed.position, self._packed.rotation
+        for name, (q, turned) in self._moved.items():
+            k = self._row_of[name]
+            rows = tuple(tR[k].ravel().tolist()) if turned else None
+            self._target_map[name] = self._target_map[name]._moved_to(tuple(tp[k].tolist()), q, rows)
+        self._moved.clear()
 
     @_targets.setter
     def _targets(self, targets: dict[str, Target]) -> None:

@@ -146,3 +146,20 @@ def test_a_single_chain_solves_without_staging_positions_first(arm, biped, rng):
         _same(default, staged)
         differs |= default.iterations != unstaged.iterations or not np.array_equal(default.q, unstaged.q)
     assert differs
+
+
+def test_a_solve_with_restarts_keeps_the_moved_target(arm):
+    """An out-of-reach move: the solve restarts and stages the targets (continuation) in the packed rows; the
+    target it reports, and the next step's, is still the moved one."""
+    solver = gsik.Solver(arm, q0=BENT)
+    start = solver.effector_poses()["hand"]
+    first = Target.from_transform(start, weight=3.0)
+    solver.set_target("hand", first)
+    far = start[:3, 3] + [2.0, 0.0, 0.0]
+    turned = _circle(start)[5][:3, :3]
+    solver.move_target("hand", far, turned)
+    result = solver.solve()
+    assert not result.converged and result.attempts > 1
+    assert solver.targets == {"hand": first.replace(position=far, orientation=turned)}
+    fresh = gsik.Solver(arm, q0=solver.q)
+    _same(solver.step(), fresh.step({"hand": first.replace(position=far, orientation=turned)}))
