@@ -116,7 +116,7 @@ class TargetSetting:
         if name not in self._target_map:
             self._check_target_name(name)
             raise TargetError(f"{name!r} has no target to move; set one first (set_target or set_targets); "
-                              f"targets: {choices(self._target_map)}")
+                              f"targets: {choices(self._target_map) or 'none'}")
         try:
             xyz = checked_position(position)
             q, rows = (None, None) if orientation is None else checked_rotation(orientation)
