@@ -24,6 +24,8 @@ def compile_kernels() -> float:
         solver = gsik.Solver(biped, settings=settings)
         targets = {n: gsik.Target.from_transform(T) for n, T in solver.effector_poses().items()}
         solver.step(targets)
+        name, T = next(iter(solver.effector_poses().items()))
+        solver.move_target(name, T[:3, 3], T[:3, :3])  # gsik.kernels.targets
         solver.solve(targets)
         solver.set_root("left_foot")
     solver = gsik.Solver(biped)  # the prioritised path (gsik.kernels.priority): two levels and a posture

@@ -65,6 +65,7 @@ class AttemptPolicy:
             self.set_targets(targets)
         if q0 is not None:
             self.set_q(q0)
+        self._make_moved_targets()  # before a continuation stages other values in the packed rows
         if self._settled is not None and self._settled[0] == self._reach_key():
             return self._solve_result(self._settled[1], 1)  # nothing further can do better: no work
         stats, attempts = self._attempts()
@@ -87,7 +88,7 @@ class AttemptPolicy:
         the further ones the settings and its outcome call for; the best one is left as the state."""
         restarts = self._settings.restarts > 0
         start = self._q.copy()
-        self._work_done[:] = 0
+        self._work_done = [0, 0]
         stats = self._solve_from(start)
         attempts = 1
         if _status(stats) is not Status.CONVERGED and restarts:
@@ -215,19 +216,36 @@ class AttemptPolicy:
 
     def _count(self, stats: np.ndarray) -> np.ndarray:
         """Add an attempt's (or a stage's) work to ``_work_done``; returns ``stats``."""
-        self._work_done[0] += int(stats[O_ITERATIONS])
-        self._work_done[1] += int(stats[O_SWEEPS])
+        done, counts = self._work_done, stats.tolist()  # Python floats: cheaper to read than NumPy scalars
+        done[0] += int(counts[O_ITERATIONS])
+        done[1] += int(counts[O_SWEEPS])
         return stats
 
     def _kernel_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """The single-level attempt (:func:`gsik.kernels.solve.solve`) from ``q0``; a copy of its statistics."""
-        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
-        before = self._q.copy()
-        solve_kernels.solve(self._model, self._settings.kernel_settings(for_solve=True), self._packed,
-                            self._topo.root_frame, self._W, self._q, iterations, self._ws)
-        if not self._ws.stats[O_FINITE]:
-            self._refuse_non_finite(before, self._ws.stats)
-        return self._ws.stats.copy()
+        if q0 is self._q:
+            q0 = q0.copy()  # kept: a refused attempt goes back to it
+        self._q[:] = q0  # the kernel clamps it into the limits (cheaper there than np.clip here)
+        solve, inputs = self._solve_call or self._solve_inputs()
+        solve(*inputs, iterations, self._ws)
+        stats = self._ws.stats
+        if not stats[O_FINITE]:
+            self._refuse_non_finite(np.clip(q0, self._skeleton.lower, self._skeleton.upper), stats)
+        return stats.copy()
+
+    def _solve_inputs(self) -> tuple:
+        """``(solve kernel, its arguments before the iterations and the workspace)``: persistent arrays, built once
+        per configuration as a step's (:meth:`~gsik.solver.Solver._kernel_inputs`)."""
+        settings = self._settings.kernel_settings(for_solve=True)._replace(positions_first=self._stages_positions())
+        inputs = (self._model, settings, self._packed, self._topo.root_frame, self._W, self._q)
+        self._solve_call = (kernels.compiled_entry(solve_kernels.solve, *inputs, 0, self._ws), inputs)
+        return self._solve_call
+
+    def _stages_positions(self) -> bool:
+        """True if a solve's attempts meet the positions first: ``positions_first`` is on and the skeleton has
+        more than one effector (a single chain goes for every row at once: fewer linearisations, see
+        :class:`~gsik.settings.SolverSettings`)."""
+        return self._settings.positions_first and len(self._topo.effector_names) > 1
 
     def _reaches_first(self) -> bool:
         """True if a prioritised attempt may meet its targets on the single-level path first: a posture is the
@@ -292,7 +310,7 @@ class AttemptPolicy:
         :data:`~gsik.kernels.solve.STAGE_ANGLE`, prioritised steps on the positions alone (every level's
         orientation rows off), as a plain attempt's first phase, for at most
         :data:`~gsik.kernels.solve.POSITION_PHASE_SHARE` of ``iterations``; returns the steps made."""
-        if not (self._settings.positions_first and iterations) or \
+        if not (self._stages_positions() and iterations) or \
                 c.errors(self._ws.R, self._ws.p)[1].max(initial=0.0) <= solve_kernels.STAGE_ANGLE:
             return 0
         tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)

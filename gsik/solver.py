@@ -18,7 +18,7 @@ import numpy as np
 from gsik import control, kernels
 from gsik.attempts import SETTLED_AGREEMENT, SETTLED_REPEATS, AttemptPolicy  # noqa: F401  (re-exported)
 from gsik.balance import center_of_mass
-from gsik.errors import SolverError, TargetError, choices, show_value
+from gsik.errors import SolverError, choices, show_value
 from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
 from gsik.kernels import solve as solve_kernels  # noqa: F401  (gsik.solver.solve_kernels, as before)
 from gsik.kernels import step as step_kernels
@@ -28,6 +28,7 @@ from gsik.result import (_STATUSES, SolveResult, Status, errors_by_effector, max
                          max_position_error)  # re-exported: gsik.solver's names as before the split
 from gsik.rotations import transform
 from gsik.skeleton import Skeleton
+from gsik.solver_targets import MAX_PRIORITY_LEVELS, MAX_TARGETS, TargetSetting  # noqa: F401  (re-exported)
 from gsik.settings import PAPER_METHOD, SolverSettings, setting_names
 from gsik.targets import MAX_COORDINATE, Target
 
@@ -35,15 +36,12 @@ from gsik.targets import MAX_COORDINATE, Target
 #: system loses every digit of the targets to the posture.
 MAX_POSTURE_WEIGHT = 1e12
 
-#: Most enabled targets a solver takes at once (a tracked 100-joint clip uses about 200).
-MAX_TARGETS = 512
-#: Most distinct priority levels among them.
-MAX_PRIORITY_LEVELS = 16
+_new_tuple = tuple.__new__
 
 __all__ = ["PAPER_METHOD", "SolveResult", "Solver", "SolverSettings", "Status", "setting_names"]
 
 
-class Solver(AttemptPolicy):
+class Solver(TargetSetting, AttemptPolicy):
     """A stateful IK solver for one skeleton.
 
     The solver keeps the joint angles, the pinned root and the previous
@@ -79,7 +77,7 @@ class Solver(AttemptPolicy):
         self._targets: dict[str, Target] = {}
         self._settled = None  # (what a solve depended on, its statistics) after a solve ended at a best reach
         self._warm = None  # (angles, posture) a solve converged to: a solve starting there is warm
-        self._work_done = np.zeros(2, dtype=np.int64)  # linearisations and sweeps of the current solve
+        self._work_done = [0, 0]  # linearisations and sweeps of the current solve
         self._posture: control.Posture | None = None
         self._balance = False
         self._controller: control.Controller | None = None  # None: to be made (or retargeted) before use
@@ -130,11 +128,14 @@ class Solver(AttemptPolicy):
         # q and the errors live in one buffer so a result copies them at once.
         self._state = np.zeros(sk.n_dofs + 2 * m)
         self._q = self._state[: sk.n_dofs]
+        self._result_ends = (sk.n_dofs, sk.n_dofs + m)  # where q, then the position errors end in _state
         self._q[:] = q
         self._q_before = np.empty(sk.n_dofs)  # a prioritised step's starting angles, to undo a non-finite one
         self._ws = kernels.make_workspace(sk.n_frames, sk.n_dofs, m, err=self._state[sk.n_dofs:].reshape(2, m))
         self._ws.lam[0] = lam
-        self._inputs = None
+        self._inputs = self._solve_call = self._move_row = None  # the kernels' cached calls: made at first use
+        self._row_of = {name: k for k, name in enumerate(self._topo.effector_names)}
+        self._layout = None  # the targets' layout the packed rows hold: None packs every row again
         self._refresh_frames()
         self._pack_targets()
 
@@ -142,8 +143,22 @@ class Solver(AttemptPolicy):
         forward_kinematics(self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
 
     def _pack_targets(self) -> None:
+        """The targets into the kernels' rows. When only their positions and orientations changed since the last
+        packing (a drag's every frame: same names, weights, position-only flags and priorities), only those are
+        written; the rows without a target keep what the last full packing put there (weight 0: unused)."""
         self._controller = None
-        self._is_controlled = self._posture is not None or self._balance or self._controlled_targets()
+        layout = tuple([(name, t.weight, t.position_only, t.priority) for name, t in self._targets.items()])
+        if layout == self._layout:
+            tp, tR = self._packed.position, self._packed.rotation
+            for name, t in self._targets.items():
+                k = self._row_of.get(name)
+                if k is not None:
+                    tp[k] = t.position
+                    tR[k] = t.rotation
+            self._is_controlled = self._posture is not None or self._balance or self._layout_controlled
+            return
+        self._layout, self._layout_controlled = layout, self._controlled_targets()
+        self._is_controlled = self._posture is not None or self._balance or self._layout_controlled
         ow = self._settings.orientation_weight
         tp, tR, row_w = self._packed
         row_w[:] = 0.0
@@ -195,16 +210,12 @@ class Solver(AttemptPolicy):
         """A copy of the pinned root's world transform (4, 4)."""
         return self._W.copy()
 
-    @property
-    def targets(self) -> dict[str, Target]:
-        """The current targets (a new dict; targets themselves are immutable)."""
-        return dict(self._targets)
-
     def configure(self, **changes) -> None:
         """Change settings by name (validated); unknown names raise :class:`SolverError`."""
         self._settings = self._make_settings(self._settings, changes)
-        self._inputs = None
+        self._inputs = self._solve_call = None  # the kernels' cached calls: made again at first use
         self._ws.lam[0] = self._settings.damping
+        self._layout = None  # the orientation weight may have changed: pack every row again
         self._pack_targets()
 
     def set_q(self, q) -> None:
@@ -245,50 +256,6 @@ class Solver(AttemptPolicy):
                                                                       self._topo.effector_frame)}
 
     # -- targets --------------------------------------------------------------
-    def set_targets(self, targets: Mapping[str, Target | None]) -> None:
-        """Replace all targets. An effector with no target (``None``, or a disabled one) is free.
-
-        Raises:
-            TargetError: for a name that is not one of :attr:`effector_names`
-                (the root cannot have a target) or a value that is not a
-                :class:`Target`. Nothing changes when it raises.
-        """
-        checked = self._check_targets(targets)
-        self._targets = checked
-        self._pack_targets()
-
-    def set_target(self, name: str, target: Target | None) -> None:
-        """Set or (with ``None``) remove one effector's target."""
-        checked = self._check_targets({name: target})
-        _check_target_counts({**{n: t for n, t in self._targets.items() if n != name}, **checked})
-        self._targets.pop(name, None)
-        self._targets.update(checked)
-        self._pack_targets()
-
-    def _check_targets(self, targets: Mapping[str, Target | None]) -> dict[str, Target]:
-        if not isinstance(targets, Mapping):
-            raise TargetError(f"targets must be a mapping of effector name to Target, got {type(targets).__name__}")
-        out = {}
-        for name, t in targets.items():
-            self._check_target_name(name)
-            if t is None:
-                continue
-            if not isinstance(t, Target):
-                raise TargetError(f"target for {name!r} must be a gsik.Target, got {type(t).__name__}")
-            if t.enabled:  # a disabled target leaves its effector free, as no target does
-                out[name] = t
-        _check_target_counts(out)
-        return out
-
-    def _check_target_name(self, name) -> None:
-        """Raise :class:`TargetError` unless ``name`` is an effector, or a joint or site other than the root."""
-        if name in self._topo.effector_names or (name != self.root and name in self._target_frames):
-            return
-        extra = f" ({name!r} is the IK root)" if name == self.root else ""
-        others = [n for n in self.target_names if n not in self._topo.effector_names]
-        raise TargetError(f"no effector {name!r}{extra}; effectors: {choices(self._topo.effector_names)}; "
-                          f"other joints and sites: {choices(others)}")
-
     # -- solving --------------------------------------------------------------
     def step(self, targets: Mapping[str, Target | None] | None = None) -> SolveResult:
         """One frame: one linearisation and up to ``settings.sweeps`` PGS sweeps.
@@ -343,11 +310,12 @@ class Solver(AttemptPolicy):
     def _result(self, st: np.ndarray, residual_index: int, attempts: int) -> SolveResult:
         # q and the (2, m) errors share one buffer: one copy, three views the caller owns.
         out = self._state.copy()
-        n, m = self._q.shape[0], len(self._topo.effector_names)
+        n, nm = self._result_ends
         stats = st.tolist()
-        return SolveResult(out[:n], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]), int(stats[O_SWEEPS]),
-                           stats[residual_index], self._topo.effector_names, out[n:n + m], out[n + m:],
-                           stats[O_STEP_NORM], attempts)
+        # tuple.__new__: every field given, so NamedTuple's own __new__ (a Python call with defaults) is skipped.
+        return _new_tuple(SolveResult, (out[:n], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
+                                        int(stats[O_SWEEPS]), stats[residual_index], self._topo.effector_names,
+                                        out[n:nm], out[nm:], stats[O_STEP_NORM], attempts))
 
     def set_root(self, name: str) -> None:
         """Make the joint or site ``name`` the IK root; the pose does not move.
@@ -461,17 +429,6 @@ class Solver(AttemptPolicy):
         """A result naming every effector, then the other targeted frames, with their errors."""
         names, pos, ori = self._make_controller().report(self._topo.effector_names, self._ws.R, self._ws.p)
         return SolveResult(self._q.copy(), status, iterations, 0, residual, names, pos, ori, step_norm, attempts)
-
-
-def _check_target_counts(targets: Mapping[str, Target]) -> None:
-    """At most :data:`MAX_TARGETS` enabled targets on at most :data:`MAX_PRIORITY_LEVELS` levels: a step's cost
-    grows with both (a level is one least-squares solve in what the levels above leave)."""
-    if len(targets) > MAX_TARGETS:
-        raise TargetError(f"{len(targets):,} enabled targets; the limit is {MAX_TARGETS:,}")
-    levels = {t.priority for t in targets.values()}
-    if len(levels) > MAX_PRIORITY_LEVELS:
-        raise TargetError(f"targets on {len(levels):,} priority levels; the limit is {MAX_PRIORITY_LEVELS} (give "
-                          "targets that may trade off against each other the same priority)")
 
 
 def _posture_precision(weights, n: int) -> np.ndarray:

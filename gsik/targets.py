@@ -22,12 +22,18 @@ QUATERNION_TOLERANCE = ROTATION_TOLERANCE * 100
 MAX_COORDINATE = 1e6
 #: Largest target weight [-].
 MAX_WEIGHT = 1e6
+#: Columns of a target matrix orthonormal within this [-] keep it as given; farther off (up to
+#: ``ROTATION_TOLERANCE``) it is re-orthonormalised.
+EXACT_ROTATION = 1e-12
 #: The identity orientation (w, x, y, z): what a target made without an orientation holds.
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
 # Fields in value order: equality, hashing and replace() all walk this one list.
 _FIELDS = ("position", "orientation", "weight", "position_only", "enabled", "priority")
 _PACK3 = struct.Struct("3d").pack
 _PACK9 = struct.Struct("9d").pack
+#: Write 3 (9) floats into a writable buffer at a byte offset: a position (rotation) row of a float64 array.
+PACK3_INTO = struct.Struct("3d").pack_into
+PACK9_INTO = struct.Struct("9d").pack_into
 _EYE = np.frombuffer(_PACK9(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)).reshape(3, 3)
 
 
@@ -69,7 +75,7 @@ class Target:
         if orientation is None:
             q, R, position_only = IDENTITY, _EYE, True
         else:
-            q, R = _orientation(orientation)
+            q, R = checked_orientation(orientation)
         self._fill(_position(position), q, R, weight, position_only, enabled, priority)
 
     def _fill(self, p: np.ndarray, q: tuple, R: np.ndarray, weight, position_only, enabled, priority) -> None:
@@ -136,6 +142,14 @@ class Target:
             raise TargetError(f"target transform must have shape (4, 4), got {T.shape}")
         return cls(T[:3, 3], T[:3, :3], weight, position_only, enabled, priority)
 
+    def _moved_to(self, xyz: tuple[float, float, float], q: tuple | None, rows: tuple | None) -> Target:
+        """A copy at the position ``xyz`` and, unless ``rows`` is None, the orientation ``(q, rows)``, both already
+        checked (:func:`checked_position`, :func:`checked_rotation`): what ``replace`` would make."""
+        new = Target.__new__(Target)
+        q, R = (self._orientation, self.rotation) if rows is None else (q, rotation_matrix(rows))
+        new._fill(np.frombuffer(_PACK3(*xyz)), q, R, self.weight, self.position_only, self.enabled, self.priority)
+        return new
+
     def replace(self, **changes) -> Target:
         """A copy with some fields changed (validated again; an unchanged orientation keeps its matrix)."""
         unknown = sorted(set(changes) - set(_FIELDS))
@@ -156,13 +170,22 @@ def _rebuild(position, orientation, weight, position_only, enabled, priority=0) 
 
 
 def _position(value) -> np.ndarray:
+    return np.frombuffer(_PACK3(*checked_position(value)))  # a fresh read-only float64 array
+
+
+def checked_position(value) -> tuple[float, float, float]:
+    """A target position ``value`` (3,) [m] as three floats, checked as :class:`Target` checks it.
+
+    Raises:
+        TargetError: if it is not 3 numbers, or not finite, or farther than :data:`MAX_COORDINATE`.
+    """
     x, y, z = _three_floats(value)
     if not (abs(x) <= MAX_COORDINATE and abs(y) <= MAX_COORDINATE and abs(z) <= MAX_COORDINATE):  # NaN fails too
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
             raise TargetError(f"target position must be finite, got {[x, y, z]}")
         raise TargetError(f"target position must be within {MAX_COORDINATE:g} m of the origin in x, y and z, "
                           f"got {[x, y, z]}")
-    return np.frombuffer(_PACK3(x, y, z))  # a fresh read-only float64 array
+    return x, y, z
 
 
 def _three_floats(value) -> tuple[float, float, float]:
@@ -199,12 +222,30 @@ def _weight(value) -> float:
     return w
 
 
-def _orientation(value) -> tuple[tuple[float, float, float, float] | None, np.ndarray]:
-    """``(quaternion, read-only matrix)`` of a quaternion (4,) or a rotation matrix (3, 3) (quaternion None)."""
+def checked_orientation(value) -> tuple[tuple[float, float, float, float] | None, np.ndarray]:
+    """``(quaternion, read-only matrix)`` of a quaternion (4,) or a rotation matrix (3, 3) (quaternion None),
+    checked as :class:`Target` checks it.
+
+    Raises:
+        TargetError: for a wrong shape, a non-finite value, a matrix that is not a rotation or a quaternion not
+            of unit norm.
+    """
+    q, rows = checked_rotation(value)
+    return q, rotation_matrix(rows)
+
+
+def rotation_matrix(rows: tuple[float, ...]) -> np.ndarray:
+    """A fresh read-only rotation matrix (3, 3) of its 9 entries ``rows`` (row by row)."""
+    return np.frombuffer(_PACK9(*rows)).reshape(3, 3)
+
+
+def checked_rotation(value) -> tuple[tuple[float, float, float, float] | None, tuple[float, ...]]:
+    """``(quaternion, the rotation matrix's 9 entries row by row)`` of a quaternion (4,) or a rotation matrix
+    (3, 3) (quaternion None), checked as :func:`checked_orientation`; no array made."""
     if type(value) is tuple and len(value) == 4:
         return _from_quaternion(value)
-    try:
-        a = value if type(value) is np.ndarray and value.dtype == np.float64 else np.array(value, dtype=float)
+    try:  # dtype.char: comparing the dtype with np.float64 costs microseconds
+        a = value if type(value) is np.ndarray and value.dtype.char == "d" else np.array(value, dtype=float)
     except (TypeError, ValueError, OverflowError):
         raise TargetError(f"target orientation must be a 3x3 rotation matrix or a quaternion, "
                           f"got {show_value(value)}") from None
@@ -215,7 +256,7 @@ def _orientation(value) -> tuple[tuple[float, float, float, float] | None, np.nd
     raise TargetError(f"target orientation must have shape (3, 3) or (4,), got {a.shape}")
 
 
-def _from_quaternion(q: tuple) -> tuple[tuple[float, float, float, float], np.ndarray]:
+def _from_quaternion(q: tuple) -> tuple[tuple[float, float, float, float], tuple[float, ...]]:
     try:
         w, x, y, z = q = (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
     except (TypeError, ValueError, OverflowError):
@@ -229,13 +270,12 @@ def _from_quaternion(q: tuple) -> tuple[tuple[float, float, float, float], np.nd
     if abs(norm - 1.0) > QUATERNION_TOLERANCE:
         raise TargetError(f"target quaternion (w, x, y, z) must have unit norm, got norm {norm:.6g}")
     s = 2.0 / n2
-    R = np.frombuffer(_PACK9(1.0 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y),
-                             s * (x * y + w * z), 1.0 - s * (x * x + z * z), s * (y * z - w * x),
-                             s * (x * z - w * y), s * (y * z + w * x), 1.0 - s * (x * x + y * y))).reshape(3, 3)
-    return q, R
+    return q, (1.0 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y),
+               s * (x * y + w * z), 1.0 - s * (x * x + z * z), s * (y * z - w * x),
+               s * (x * z - w * y), s * (y * z + w * x), 1.0 - s * (x * x + y * y))
 
 
-def _from_matrix(a: np.ndarray) -> tuple[None, np.ndarray]:
+def _from_matrix(a: np.ndarray) -> tuple[None, tuple[float, ...]]:
     m = a.tolist()
     (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = m
     # Columns orthonormal and det > 0, in plain floats (np.allclose costs more than the whole target).
@@ -247,9 +287,8 @@ def _from_matrix(a: np.ndarray) -> tuple[None, np.ndarray]:
         if not all(math.isfinite(v) for row in m for v in row):
             raise TargetError(f"target orientation must be finite, got {m}")
         raise TargetError("target orientation is not a rotation matrix (must be orthonormal with determinant +1)")
-    if off > 1e-12:
+    if off > EXACT_ROTATION:
         # Re-orthonormalise what is visibly off, so the kernels' log map sees an exact rotation.
         u, _, vt = np.linalg.svd(a)
-        m = (u @ vt).tolist()
-    R = np.frombuffer(_PACK9(*m[0], *m[1], *m[2])).reshape(3, 3)  # read-only, the values as given
-    return None, R  # the quaternion is computed when first asked for
+        (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = (u @ vt).tolist()
+    return None, (a00, a01, a02, a10, a11, a12, a20, a21, a22)  # the quaternion is computed when first asked for

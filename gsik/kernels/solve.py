@@ -220,7 +220,8 @@ def _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts
 
 @njit(cache=True)
 def solve(model, settings, targets, root, W, q, max_iterations, ws):
-    """One attempt from ``q``: until the targets are met, progress stops or ``max_iterations`` linearisations.
+    """One attempt from ``q`` (first clamped into the limits): until the targets are met, progress stops or
+    ``max_iterations`` linearisations.
 
     Each linearisation solves ``(J^T W J + lam I) x = J^T W e`` within the
     limits (:func:`~gsik.kernels.pgs.bounded_solve`, or PGS sweeps alone
@@ -233,6 +234,8 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     exhausted), ``O_ITERATIONS`` (linearisations), ``O_SWEEPS``, ``O_COST``,
     ``O_STEP_NORM``, ``O_FINITE``. ``settings.sweeps`` are the sweeps per linearisation.
     """
+    for i in range(q.shape[0]):  # the start, clamped into the limits
+        q[i] = min(max(q[i], model.lower[i]), model.upper[i])
     sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], True)
     counts = np.zeros(2, dtype=np.int64)
     _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)

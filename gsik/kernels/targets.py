@@ -1,0 +1,36 @@
+"""A target moved in place (:meth:`gsik.Solver.move_target`): its checks and its packed row in one compiled call."""
+
+from __future__ import annotations
+
+from gsik._jit import njit
+
+#: What :func:`move_row` returns: the row written, or nothing written (the caller's own checks then raise, or
+#: re-orthonormalise a rotation a little off, as :class:`gsik.Target` does).
+WRITTEN, NOT_WRITTEN = 0, 1
+
+
+@njit(cache=True)
+def move_row(position, rotation, max_coordinate, exact, tp, tR, k):
+    """Write ``position`` (3,) [m] and ``rotation`` (3, 3) into row ``k`` of the packed targets ``tp`` (m, 3) and
+    ``tR`` (m, 3, 3) if they pass :class:`gsik.Target`'s checks as they are: every coordinate within
+    ``max_coordinate`` (so finite), the rotation's columns orthonormal within ``exact`` (where ``Target`` keeps
+    a matrix as given) and its determinant positive. A ``rotation`` of shape (0, 0) leaves the row's rotation.
+    Returns :data:`WRITTEN`, or :data:`NOT_WRITTEN` with nothing changed."""
+    x, y, z = position[0], position[1], position[2]
+    if not (abs(x) <= max_coordinate and abs(y) <= max_coordinate and abs(z) <= max_coordinate):  # NaN fails too
+        return NOT_WRITTEN
+    if rotation.shape[0] == 3:
+        a00, a01, a02 = rotation[0, 0], rotation[0, 1], rotation[0, 2]
+        a10, a11, a12 = rotation[1, 0], rotation[1, 1], rotation[1, 2]
+        a20, a21, a22 = rotation[2, 0], rotation[2, 1], rotation[2, 2]
+        off = max(abs(a00 * a00 + a10 * a10 + a20 * a20 - 1.0), abs(a01 * a01 + a11 * a11 + a21 * a21 - 1.0),
+                  abs(a02 * a02 + a12 * a12 + a22 * a22 - 1.0), abs(a00 * a01 + a10 * a11 + a20 * a21),
+                  abs(a00 * a02 + a10 * a12 + a20 * a22), abs(a01 * a02 + a11 * a12 + a21 * a22))
+        det = a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) + a02 * (a10 * a21 - a11 * a20)
+        if not (off <= exact and det > 0.0):  # NaN fails too
+            return NOT_WRITTEN
+        for i in range(3):
+            for j in range(3):
+                tR[k, i, j] = rotation[i, j]
+    tp[k, 0], tp[k, 1], tp[k, 2] = x, y, z
+    return WRITTEN
