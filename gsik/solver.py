@@ -440,14 +440,16 @@ class Solver(AttemptPolicy):
     def _make_controller(self) -> control.Controller:
         """The controller for the current targets: the last one retargeted if only their values changed."""
         if self._controller is None:
-            sk = self._skeleton
-            tasks = control.frame_tasks(sk, self._targets, self._settings.orientation_weight)
+            sk, ow = self._skeleton, self._settings.orientation_weight
             balance = control.support(sk, self._targets, self._ws.p) if self._balance else None
             last = self._last_controller
-            if last is not None and last.key == control.structure(sk, tasks, self._posture, balance, self._settings):
-                last.retarget(tasks)
+            key = control.structure_of(sk.root, {n: t.priority for n, t in self._targets.items()}, self._posture,
+                                       balance, self._settings)
+            if last is not None and last.key == key:
+                last.retarget_targets(self._targets, ow)
             else:
-                last = control.Controller(sk, tasks, self._posture, balance, self._settings)
+                last = control.Controller(sk, control.frame_tasks(sk, self._targets, ow), self._posture, balance,
+                                          self._settings)
             self._controller = self._last_controller = last
         return self._controller
 
