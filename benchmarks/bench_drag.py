@@ -11,7 +11,7 @@ then dragged position-only round a 0.1 m circle (one turn per 100 frames) for ``
 Paths: plain (every target at priority 0, no posture: the fast kernel), the posture with the hands at priority 0
 (targets as hard constraints, posture below) and at 1 (the studio's pins), and the studio's default: pins, hands at
 1 and the natural posture (the bundled prior, ``use_prior(solver, bundled_prior("biped"))``: a full precision
-matrix). ``--before PATH`` runs the same with the
+matrix), with the studio's ``tracking_steps=3``. ``--before PATH`` runs the same with the
 ``gsik`` of another checkout in a subprocess and prints both. Nothing here is asserted by the tests.
 
 Run: ``python benchmarks/bench_drag.py [--frames 300] [--before /tmp/settle-before]``.
@@ -59,6 +59,8 @@ def _solver(posture: str | None, hand_priority: int):
         solver.set_posture(solver.q)
     elif posture == "prior":
         use_prior(solver, bundled_prior("biped"))
+        if "tracking_steps" in gsik.solver.setting_names():  # the studio's default (a checkout before it has none)
+            solver.configure(tracking_steps=3)
     solver.set_targets(_targets(poses, 0, hand_priority))
     return solver, poses
 

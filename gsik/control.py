@@ -25,6 +25,8 @@ of jittering, and a held step costs nothing.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
@@ -41,6 +43,12 @@ from gsik.priority import BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE,
 from gsik.rotations import transform
 from gsik.stall import StallDetector, unmet_levels
 
+#: A target lags while it is off by more than this many times its tolerance (1 mm, 0.01 rad at the defaults): with
+#: ``settings.tracking_steps`` above 1 a ``Solver.step()`` then linearises again. Measured on bench_drag's studio
+#: default (pins and the bundled prior, hands dragged 6 mm a frame round a circle): one linearisation a frame kept
+#: both hands within 1 mm in 243 of 300 frames (the posture's move, flat only to first order, leaves them up to
+#: 7 mm off), up to three in 300 (a third of the frames take two).
+TRACKING_ERROR = 10.0
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
 #: Largest adaptive damping (the fast path's too): a step refused at it holds the pose.
@@ -141,11 +149,11 @@ class Controller:
 
     def _retarget(self, tp: np.ndarray, tR: np.ndarray, row_w: np.ndarray) -> None:
         """Target positions (m, 3) [m], orientations (m, 3, 3) and row weights (m, 6), in task order."""
-        if self._row_w is not None and np.array_equal(tp, self._tp) and np.array_equal(tR, self._tR) \
-                and np.array_equal(row_w, self._row_w):
+        same_w = _same(row_w, self._row_w)
+        if same_w and _same(tp, self._tp) and _same(tR, self._tR):
             return  # the same targets again (a held drag): what the last steps learnt still holds
         self._tp[:], self._tR[:] = tp, tR  # in place: the kernels' inputs hold them
-        if not np.array_equal(row_w, self._row_w):
+        if not same_w:
             self._row_w = row_w
             self._thresholds()
         self._state_cache = self._held = None
@@ -161,6 +169,7 @@ class Controller:
         used = np.stack([w[:, 0] > 0.0, w[:, 3] > 0.0])
         tolerance = np.array([[s.position_tolerance], [s.orientation_tolerance]])
         self._tolerance = np.where(used, tolerance, np.inf)
+        self._used = used
         L = len(self._levels)
         rows = np.repeat(self._task_level, 6)
         flat = w.reshape(-1)
@@ -213,7 +222,7 @@ class Controller:
         _, names, index = self._layout
         self._task_errors(R, p)
         padded = np.zeros((2, len(self.names) + 1))  # a last column of zeros for the effectors without a target
-        padded[:, :-1] = np.where(self._tolerance < np.inf, self._err, 0.0)
+        np.copyto(padded[:, :-1], self._err, where=self._used)
         out = padded[:, index]
         return names, out[0], out[1]
 
@@ -304,12 +313,13 @@ class Controller:
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
         cached = self._state_cache
-        fresh = cached is not None and np.array_equal(cached[0], q) and np.array_equal(cached[1], W)
+        fresh = cached is not None and _same(q, cached[0]) and _same(W, cached[1])
         state0 = cached[2] if fresh else anchored(self._level_state(q, R, p))
         tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
-            step_norm = float(np.linalg.norm(q2 - q))
+            dq = q2 - q
+            step_norm = math.sqrt(float(dq @ dq))
             q[:], R[:], p[:] = q2, R2, p2
             state = anchored(state, state0, decided if verdict == BETTER else 0)
             self._state_cache = (q.copy(), W.copy(), state)
@@ -323,17 +333,24 @@ class Controller:
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
                                        or (not accepted and damping >= MAX_DAMPING)
                                        or self._stall.creeps(unmet_levels(state.met, self._posture is not None), state.costs))
-        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm)
+        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
+                             not state.converged and self._lagging(state.error))
         # A held pose is kept until the targets change: the same step again would hold again, and a creep that
         # was taken stops (a frame asked for anyway changes nothing).
         self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
         self._last_held = held
         return stats
 
+    def _lagging(self, e: np.ndarray) -> bool:
+        """True if a target's error rows ``e`` (6 m,) put it more than :data:`TRACKING_ERROR` times its tolerance off."""
+        rows = e.reshape(-1, 2, 3)
+        off = np.sqrt(np.einsum("kij,kij->ik", rows, rows))  # (2, m) position [m] and orientation [rad] errors
+        return bool((off > TRACKING_ERROR * self._tolerance).any())
+
     def _holds(self, q, W, damping) -> bool:
         """True if the last step held the pose ``q`` at ``W`` with this damping: a step now would do the same."""
         held = self._held
-        return held is not None and held[2] == damping and np.array_equal(held[0], q) and np.array_equal(held[1], W)
+        return held is not None and held[2] == damping and _same(q, held[0]) and _same(W, held[1])
 
     def _damped_trial(self, q, W, R, p, state0: LevelState, damping) -> tuple[int, tuple]:
         """``(halvings made, trial)``: the prioritised step from ``q``, halved up to 3 times while its
@@ -443,3 +460,8 @@ class Controller:
         pos, ori = self.errors(R, p)
         s = self._settings
         return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
+
+
+def _same(a: np.ndarray, b: np.ndarray | None) -> bool:
+    """True if ``b`` holds the very values of ``a`` (bit for bit: a cheaper test than ``np.array_equal``)."""
+    return b is not None and a.shape == b.shape and a.tobytes() == b.tobytes()

@@ -65,6 +65,7 @@ class ControlStats(NamedTuple):
         converged: Every target is within the position and orientation tolerances.
         cost: Weighted squared error ``0.5 e^T W e`` of the targets, all levels.
         step_norm: Size of the change of ``q`` [rad].
+        lagging: A target is off by more than :data:`gsik.control.TRACKING_ERROR` times its tolerance.
     """
 
     accepted: bool
@@ -72,6 +73,7 @@ class ControlStats(NamedTuple):
     converged: bool
     cost: float
     step_norm: float
+    lagging: bool = False
 
 
 def _ordered(tasks) -> list[FrameTask]:
