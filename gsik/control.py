@@ -182,7 +182,8 @@ class Controller:
         starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         self._tasks_in = ck.ControlTasks(self._topo.effector_frame.astype(np.int64), self._tp, self._tR,
                                          np.ascontiguousarray(w), self._task_level,
-                                         0.5 * self._tolerance, self._tolerance, packed_row,
+                                         0.5 * self._tolerance, self._tolerance, TRACKING_ERROR * self._tolerance,
+                                         packed_row,
                                          packed_weight, starts)
         self._work = ck.make_work(self._sk.n_frames, self._sk.n_dofs, len(self._tasks), int(starts[-1]), L,
                                   len(counts))
@@ -238,11 +239,11 @@ class Controller:
         polygon's margin (within :data:`BALANCE_TOLERANCE`); the posture never is (it always compares by cost).
         """
         wk = self._work
-        converged, target = self._call(ck.level_state, self._tasks_in, self._posture_rows, q, R, p, wk.e, wk.err,
-                                       wk.M, wk.costs, wk.met)
-        return self._state(R, p, converged, target)
+        converged, target, lagging = self._call(ck.level_state, self._tasks_in, self._posture_rows, q, R, p, wk.e,
+                                                wk.err, wk.M, wk.costs, wk.met)
+        return self._state(R, p, converged, target, lagging)
 
-    def _state(self, R, p, converged: bool, target_cost: float) -> LevelState:
+    def _state(self, R, p, converged: bool, target_cost: float, lagging: bool) -> LevelState:
         """The :class:`~gsik.acceptance.LevelState` the kernels left in the work buffers (copied), with balance's
         level evaluated at frames ``R``, ``p``."""
         wk = self._work
@@ -252,7 +253,7 @@ class Controller:
             outside = max(signed_distance(goal, com[:2]), 0.0)
             costs[self._balance_level] = 0.5 * outside ** 2
             met[self._balance_level] = outside <= BALANCE_TOLERANCE
-        return LevelState(costs, met, costs, bool(converged), float(target_cost), wk.e.copy())
+        return LevelState(costs, met, costs, bool(converged), float(target_cost), wk.e.copy(), bool(lagging))
 
     def rank(self, q, R, p) -> tuple:
         """The levels' costs in priority order (a met level counts 0): compare poses lexicographically."""
@@ -333,19 +334,12 @@ class Controller:
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
                                        or (not accepted and damping >= MAX_DAMPING)
                                        or self._stall.creeps(unmet_levels(state.met, self._posture is not None), state.costs))
-        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
-                             not state.converged and self._lagging(state.error))
+        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm, state.lagging)
         # A held pose is kept until the targets change: the same step again would hold again, and a creep that
         # was taken stops (a frame asked for anyway changes nothing).
         self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
         self._last_held = held
         return stats
-
-    def _lagging(self, e: np.ndarray) -> bool:
-        """True if a target's error rows ``e`` (6 m,) put it more than :data:`TRACKING_ERROR` times its tolerance off."""
-        rows = e.reshape(-1, 2, 3)
-        off = np.sqrt(np.einsum("kij,kij->ik", rows, rows))  # (2, m) position [m] and orientation [rad] errors
-        return bool((off > TRACKING_ERROR * self._tolerance).any())
 
     def _holds(self, q, W, damping) -> bool:
         """True if the last step held the pose ``q`` at ``W`` with this damping: a step now would do the same."""
@@ -396,7 +390,8 @@ class Controller:
     def _trial_state(self) -> tuple:
         """``(q, R, p, LevelState)`` of the trial in the work buffers (copies)."""
         wk = self._work
-        state = self._state(wk.R, wk.p, wk.out[ck.O_CONVERGED] > 0.0, wk.out[ck.O_TARGET_COST])
+        out = wk.out.tolist()
+        state = self._state(wk.R, wk.p, out[ck.O_CONVERGED] > 0.0, out[ck.O_TARGET_COST], out[ck.O_LAGGING] > 0.0)
         return wk.q.copy(), wk.R.copy(), wk.p.copy(), state
 
     def _targets_alone(self, q, W, R, p, state0: LevelState) -> tuple | None:

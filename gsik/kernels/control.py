@@ -28,8 +28,8 @@ from gsik.kernels import priority
 from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
 
 # Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
-# convergence (1.0 / 0.0) and its targets' weighted squared error.
-O_STATUS, O_CONVERGED, O_TARGET_COST = range(3)
+# convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0).
+O_STATUS, O_CONVERGED, O_TARGET_COST, O_LAGGING = range(4)
 
 
 class ControlTasks(NamedTuple):
@@ -42,6 +42,7 @@ class ControlTasks(NamedTuple):
         level: (m,) int64 the level of each task (an index into the costs).
         band: (2, m) position [m] and orientation [rad] errors within which a task counts as met (inf: unused).
         tolerance: (2, m) the errors within which a task has converged (inf: unused).
+        lag: (2, m) the errors beyond which a task lags (inf: unused).
         packed_row: (M_t,) int64 the error row (``6 k + r``) of each packed target row, -1 for balance's.
         packed_weight: (M_t,) the packed target rows' weights.
         starts: (K + 1,) int64 the packed levels' row starts (the posture's last, when on).
@@ -54,6 +55,7 @@ class ControlTasks(NamedTuple):
     level: np.ndarray
     band: np.ndarray
     tolerance: np.ndarray
+    lag: np.ndarray
     packed_row: np.ndarray
     packed_weight: np.ndarray
     starts: np.ndarray
@@ -80,7 +82,7 @@ class ControlWork(NamedTuple):
         q: (n,) the trial angles [rad]. R: (n_frames, 3, 3), p: (n_frames, 3) the trial's world frames.
         e: (6m,) the trial's error rows. err: (2, m) its tasks' position [m] and orientation [rad] errors.
         costs: (L + 1,) the trial's level costs, the posture's last. met: (L + 1,) bool the trial's met levels.
-        M: (3, 3) scratch. out: (3,) the trial's ``O_*`` figures.
+        M: (3, 3) scratch. out: (4,) the trial's ``O_*`` figures.
     """
 
     J: np.ndarray
@@ -110,7 +112,7 @@ def make_work(n_frames: int, n_dofs: int, n_tasks: int, n_packed: int, n_levels:
     return ControlWork(np.zeros((6 * m, n)), np.zeros((n_packed, n)), np.zeros(n_packed), np.zeros(n_packed),
                        np.zeros(n_packed_levels), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                        np.zeros((n_frames, 3, 3)), np.zeros((n_frames, 3)), np.zeros(6 * m), np.zeros((2, m)),
-                       np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(3))
+                       np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(4))
 
 
 @njit(cache=True)
@@ -118,12 +120,13 @@ def level_state(tasks, posture, q, R, p, e, err, M, costs, met):
     """Every level's state at ``q`` (n,) [rad] with world frames ``R``, ``p``: the error rows ``e`` (6m,), the tasks'
     errors ``err`` (2, m), ``costs`` (L + 1,) ``0.5 e^T W e`` per level and the posture's ``0.5 |L (q - ref)|^2``
     last, ``met`` (L + 1,) (a level is met when all its tasks are within their band; the posture never is; balance's
-    are the caller's). Returns ``(converged, targets' weighted squared error)``."""
+    are the caller's). Returns ``(converged, targets' weighted squared error, a task lags)``."""
     effector_errors(R, p, tasks.frame, tasks.position, tasks.rotation, tasks.row_weight, e, err, M)
     costs[:] = 0.0
     met[:] = True
     target = 0.0
     converged = True
+    lagging = False
     for k in range(tasks.frame.shape[0]):
         c = 0.0
         for r in range(6):
@@ -136,6 +139,8 @@ def level_state(tasks, posture, q, R, p, e, err, M, costs, met):
                 met[lv] = False
             if err[a, k] > tasks.tolerance[a, k]:
                 converged = False
+            if err[a, k] > tasks.lag[a, k]:
+                lagging = True
     met[met.shape[0] - 1] = False
     L, ref = posture.factor, posture.reference
     g2 = 0.0
@@ -145,7 +150,7 @@ def level_state(tasks, posture, q, R, p, e, err, M, costs, met):
             s += L[i, d] * (q[d] - ref[d])
         g2 += s * s
     costs[costs.shape[0] - 1] = 0.5 * g2
-    return converged, target
+    return converged, target, lagging
 
 
 @njit(cache=True)
@@ -201,15 +206,16 @@ def dampings_into(costs, near, lam, base, posture_on, out):
 @njit(cache=True)
 def trial(fk, tasks, posture, root, W, lower, upper, q, dq, scale, wk):
     """The trial ``wk.q = clip(q + scale dq, lower, upper)``: its frames, errors and level state into ``wk``
-    (``wk.out``'s :data:`O_CONVERGED` and :data:`O_TARGET_COST`). ``fk``: the whole skeleton's
+    (``wk.out``'s :data:`O_CONVERGED`, :data:`O_TARGET_COST` and :data:`O_LAGGING`). ``fk``: the whole skeleton's
     :class:`~gsik.kernels.KinematicModel`, ``root`` its pinned frame at ``W`` (4, 4)."""
     for d in range(q.shape[0]):
         wk.q[d] = min(max(q[d] + scale * dq[d], lower[d]), upper[d])
     frames_into(fk.frame_parent, fk.frame_offset, fk.frame_rotation, fk.frame_axis, fk.frame_dof, wk.q, root, W,
                 wk.R, wk.p)
-    converged, target = level_state(tasks, posture, wk.q, wk.R, wk.p, wk.e, wk.err, wk.M, wk.costs, wk.met)
+    converged, target, lagging = level_state(tasks, posture, wk.q, wk.R, wk.p, wk.e, wk.err, wk.M, wk.costs, wk.met)
     wk.out[O_CONVERGED] = 1.0 if converged else 0.0
     wk.out[O_TARGET_COST] = target
+    wk.out[O_LAGGING] = 1.0 if lagging else 0.0
 
 
 @njit(cache=True)
