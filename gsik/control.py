@@ -21,6 +21,11 @@ at the largest damping, or ends a run of steps that only creep
 (:mod:`gsik.stall`), holds the pose (as a refused step of the fast path does),
 and holding is remembered, so a held target settles at its best reach instead
 of jittering, and a held step costs nothing.
+
+The levels' states, their linearisation and packing, the step and its trial run compiled
+(:mod:`gsik.kernels.control`); this module keeps the acceptance rule, the damping and the rarer branches.
+What a controller is given (:class:`FrameTask`, :class:`Posture`, :class:`Balance`) lives in
+:mod:`gsik.control_inputs`.
 """
 
 from __future__ import annotations
