@@ -131,6 +131,7 @@ class Controller:
         self._err = np.zeros((2, m))
         self._tp, self._tR = np.zeros((m, 3)), np.zeros((m, 3, 3))
         self._row_w = None  # (m, 6) set with what depends on it by retarget
+        self._target_weights = self._orientation_weight = None  # what retarget_targets made _row_w of
         self._M = np.zeros((3, 3))
         if balance is not None:
             bodies = [skeleton.frame_names[f] for f in balance.mass.body_frame]
@@ -141,6 +142,7 @@ class Controller:
     def retarget(self, tasks) -> None:
         """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
         ordered = _ordered(tasks)
+        self._target_weights = None
         self._retarget(np.array([t.position for t in ordered]).reshape(-1, 3),
                        np.array([t.rotation for t in ordered]).reshape(-1, 3, 3),
                        np.array([t.row_weight for t in ordered]).reshape(-1, 6))
@@ -148,9 +150,14 @@ class Controller:
     def retarget_targets(self, targets, orientation_weight: float) -> None:
         """:meth:`retarget` from ``{name: gsik.Target}`` (the same names and priorities as the tasks built for)."""
         ts = [targets[n] for n in self.names]
+        weights = [(t.weight, t.uses_orientation) for t in ts]
+        if weights == self._target_weights and orientation_weight == self._orientation_weight:
+            row_w = self._row_w  # the same row weights: no array to build (a drag moves targets, not weights)
+        else:
+            row_w = np.array([row_weights(t, orientation_weight) for t in ts], dtype=float).reshape(-1, 6)
         self._retarget(np.array([t.position for t in ts]).reshape(-1, 3),
-                       np.array([t.rotation for t in ts]).reshape(-1, 3, 3),
-                       np.array([row_weights(t, orientation_weight) for t in ts], dtype=float).reshape(-1, 6))
+                       np.array([t.rotation for t in ts]).reshape(-1, 3, 3), row_w)
+        self._target_weights, self._orientation_weight = weights, orientation_weight
 
     def _retarget(self, tp: np.ndarray, tR: np.ndarray, row_w: np.ndarray) -> None:
         """Target positions (m, 3) [m], orientations (m, 3, 3) and row weights (m, 6), in task order."""
@@ -174,7 +181,6 @@ class Controller:
         used = np.stack([w[:, 0] > 0.0, w[:, 3] > 0.0])
         tolerance = np.array([[s.position_tolerance], [s.orientation_tolerance]])
         self._tolerance = np.where(used, tolerance, np.inf)
-        self._used = used
         L = len(self._levels)
         rows = np.repeat(self._task_level, 6)
         flat = w.reshape(-1)
@@ -226,10 +232,8 @@ class Controller:
             where = {n: k for k, n in enumerate(self.names)}
             self._layout = (effector_names, names, np.array([where.get(n, -1) for n in names], dtype=np.int64))
         _, names, index = self._layout
-        self._task_errors(R, p)
-        padded = np.zeros((2, len(self.names) + 1))  # a last column of zeros for the effectors without a target
-        np.copyto(padded[:, :-1], self._err, where=self._used)
-        out = padded[:, index]
+        out = np.empty((2, len(names)))
+        self._call(ck.report_errors, R, p, self._tasks_in, index, self._e, self._err, self._M, out)
         return names, out[0], out[1]
 
     def _task_errors(self, R, p) -> None:
@@ -320,7 +324,7 @@ class Controller:
             return self._held[3]  # the same step from the same pose: it would hold again
         cached = self._state_cache
         fresh = cached is not None and _same(q, cached[0]) and _same(W, cached[1])
-        state0 = cached[2] if fresh else anchored(self._level_state(q, R, p))
+        state0 = cached[2] if fresh else self._level_state(q, R, p)
         tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
@@ -464,4 +468,4 @@ class Controller:
 
 def _same(a: np.ndarray, b: np.ndarray | None) -> bool:
     """True if ``b`` holds the very values of ``a`` (bit for bit: a cheaper test than ``np.array_equal``)."""
-    return b is not None and a.shape == b.shape and a.tobytes() == b.tobytes()
+    return a is b or (b is not None and a.shape == b.shape and a.tobytes() == b.tobytes())

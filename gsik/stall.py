@@ -44,15 +44,16 @@ class StallDetector:
         """True if over the last :data:`STALL_WINDOW` steps (taken or refused) no unmet level gained enough.
 
         Args:
-            unmet: (K,) True where a level is still to be met (none: never a stall).
+            unmet: (K,) True where a level is still to be met (none: never a stall); an array or a list.
             costs: (K,) the levels' weighted squared errors ``0.5 e^T W e`` after this step.
         """
-        unmet = [bool(u) for u in np.asarray(unmet, dtype=bool).tolist()]
+        unmet = [bool(u) for u in (unmet.tolist() if isinstance(unmet, np.ndarray) else unmet)]
         if not any(unmet) or (self._history and self._history[-1][0] != unmet):
             self._history.clear()  # a level met or unmet anew starts the count again
         if not any(unmet):
             return False
-        norms = [math.sqrt(c) if c >= 0.0 else math.nan for c in np.asarray(costs, dtype=float).tolist()]
+        norms = [math.sqrt(c) if c >= 0.0 else math.nan
+                 for c in (costs.tolist() if isinstance(costs, np.ndarray) else map(float, costs))]
         self._history.append((unmet, norms))
         if len(self._history) <= STALL_WINDOW:
             return False
@@ -64,8 +65,8 @@ class StallDetector:
         return True
 
 
-def unmet_levels(met: np.ndarray, posture_on: bool) -> np.ndarray:
+def unmet_levels(met: np.ndarray, posture_on: bool) -> list[bool]:
     """(L + 1,) True for each level still to be met, from ``met`` (L + 1,): the posture (when on) always is."""
-    unmet = ~np.asarray(met, dtype=bool)
-    unmet[-1] = posture_on
+    unmet = [not m for m in np.asarray(met, dtype=bool).tolist()]
+    unmet[-1] = bool(posture_on)
     return unmet

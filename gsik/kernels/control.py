@@ -154,6 +154,18 @@ def level_state(tasks, posture, q, R, p, e, err, M, costs, met):
 
 
 @njit(cache=True)
+def report_errors(R, p, tasks, index, e, err, M, out):
+    """The tasks' errors at frames ``R``, ``p`` (:func:`~gsik.kernels.kinematics.effector_errors` into ``e``,
+    ``err``) as a result reports them: ``out`` (2, k) position [m] and orientation [rad] errors of task ``index[j]``
+    in column ``j``, 0 where ``index[j]`` is -1 (no target) or the task does not use that row."""
+    effector_errors(R, p, tasks.frame, tasks.position, tasks.rotation, tasks.row_weight, e, err, M)
+    for j in range(index.shape[0]):
+        k = index[j]
+        out[0, j] = err[0, k] if k >= 0 and tasks.row_weight[k, 0] > 0.0 else 0.0
+        out[1, j] = err[1, k] if k >= 0 and tasks.row_weight[k, 3] > 0.0 else 0.0
+
+
+@njit(cache=True)
 def linearise(task_model, tasks, posture, q, R, p, e, wk):
     """The levels linearised at ``q`` (n,) [rad] (frames ``R``, ``p``; error rows ``e`` (6m,)) packed into ``wk.rows``,
     ``wk.errors``, ``wk.weights``: each target row's Jacobian row, error and weight, then the posture's rows ``L`` and
