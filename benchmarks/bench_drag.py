@@ -9,7 +9,9 @@ then dragged position-only round a 0.1 m circle (one turn per 100 frames) for ``
 - ``solve``: one ``Solver.solve()`` a frame, warm from the last frame: median ms and linearisations.
 
 Paths: plain (every target at priority 0, no posture: the fast kernel), the posture with the hands at priority 0
-(targets as hard constraints, posture below) and at 1 (the studio's pins). ``--before PATH`` runs the same with the
+(targets as hard constraints, posture below) and at 1 (the studio's pins), and the studio's default: pins, hands at
+1 and the natural posture (the bundled prior, ``use_prior(solver, bundled_prior("biped"))``: a full precision
+matrix), with the studio's ``tracking_steps=3``. ``--before PATH`` runs the same with the
 ``gsik`` of another checkout in a subprocess and prints both. Nothing here is asserted by the tests.
 
 Run: ``python benchmarks/bench_drag.py [--frames 300] [--before /tmp/settle-before]``.
@@ -26,7 +28,8 @@ import time
 
 import numpy as np
 
-PATHS = {"plain": (False, 0), "posture, hands at 0": (True, 0), "posture, hands at 1 (pins)": (True, 1)}
+PATHS = {"plain": (None, 0), "posture, hands at 0": ("start", 0), "posture, hands at 1 (pins)": ("start", 1),
+         "prior, hands at 1 (studio)": ("prior", 1)}
 PULL = np.array([0.0, 0.15, 0.0])  # [m]
 RADIUS = 0.1  # [m]
 TURN_FRAMES = 100
@@ -43,20 +46,26 @@ def _targets(poses: dict, frame: int, hand_priority: int) -> dict:
     return targets
 
 
-def _solver(posture: bool, hand_priority: int):
-    """``(solver at the drag's start, rest effector poses)``."""
+def _solver(posture: str | None, hand_priority: int):
+    """``(solver at the drag's start, rest effector poses)``; ``posture``: ``None``, ``"start"`` (the drag's start
+    pose, weight 1 per DOF) or ``"prior"`` (the biped's bundled prior: the studio's natural posture)."""
     import gsik
+    from gsik.prior import bundled_prior, use_prior
 
     solver = gsik.Solver(gsik.load_skeleton("biped"))
     poses = solver.effector_poses()
     solver.solve(_targets(poses, 0, 0))
-    if posture:
+    if posture == "start":
         solver.set_posture(solver.q)
+    elif posture == "prior":
+        use_prior(solver, bundled_prior("biped"))
+        if "tracking_steps" in gsik.solver.setting_names():  # the studio's default (a checkout before it has none)
+            solver.configure(tracking_steps=3)
     solver.set_targets(_targets(poses, 0, hand_priority))
     return solver, poses
 
 
-def _drag(posture: bool, hand_priority: int, frames: int, solve: bool) -> dict:
+def _drag(posture: str | None, hand_priority: int, frames: int, solve: bool) -> dict:
     solver, poses = _solver(posture, hand_priority)
     start = solver.q
     solver.step() if not solve else solver.solve()  # build what the path builds once

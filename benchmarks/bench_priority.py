@@ -5,12 +5,12 @@ both hands are dragged at priority 1 (0.3 m out, then round a 0.1 m circle, one 
 drags); the posture, the lowest level, is the rest pose (``set_posture()``) or the bundled learned prior
 (:func:`gsik.prior.use_prior`: a dense 30 x 30 precision). Printed, one run, medians:
 
-1. Per posture, every ``prioritized_step`` call the controller makes over ``--frames`` frames of ``step()`` (its
-   levels, box and dampings, recorded): the NumPy SVD step (:func:`gsik.priority.prioritized_step_svd`, what the
-   controller ran before), the compiled step (:func:`gsik.priority.prioritized_step`: packing and kernel), the
-   kernel alone on levels packed beforehand, and the largest difference between the steps.
-2. ``Solver.step()`` of the same drag: prioritised with each step function (the controller's is swapped for the
-   SVD one for that run), and the single-level solve (all five targets at priority 0, no posture: the fast kernel).
+1. Per posture, every full step the controller makes over ``--frames`` frames of ``step()`` (its packed levels,
+   box and dampings, recorded after :func:`gsik.kernels.control.step_trial`): the NumPy SVD step
+   (:func:`gsik.priority.prioritized_step_svd`), the compiled step (:func:`gsik.priority.prioritized_step`: packing
+   and kernel), the kernel alone on levels packed beforehand, and the largest difference between the steps.
+2. ``Solver.step()`` of the same drag, prioritised (compiled whole since issue 20: the SVD step can no longer be
+   swapped in), and the single-level solve (all five targets at priority 0, no posture: the fast kernel).
 
 Run: ``python benchmarks/bench_priority.py [--frames 300]``. Nothing here is asserted by the tests.
 """
@@ -29,8 +29,8 @@ from gsik import Solver, Target, load_skeleton
 from gsik.benchmark import HELD_AT_LEVEL_0
 from gsik.kernels import priority as kernel
 from gsik.prior import bundled_prior, use_prior
-from gsik.priority import (BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE, pack_levels, prioritized_step,
-                           prioritized_step_svd)
+from gsik.priority import (BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE, Level, pack_levels,
+                           prioritized_step, prioritized_step_svd)
 
 #: Where each hand is pulled from its rest position [m] (x: out to the left, y: forward, z: up).
 HAND_PULL = {"left_hand": np.array([0.3, 0.0, 0.1]), "right_hand": np.array([0.0, 0.3, 0.0])}
@@ -62,27 +62,31 @@ def _solver(sk, posture: str) -> Solver:
 
 
 @contextlib.contextmanager
-def _controller_step(function):
-    """The controller's step function replaced by ``function`` inside the block."""
-    saved = gsik.control.prioritized_step
-    gsik.control.prioritized_step = function
+def _recording(calls: list):
+    """Inside the block, every full step of the controller appends ``(levels, lo, hi, dampings)`` to ``calls``."""
+    saved = gsik.control.Controller._first_trial
+
+    def recording(self, q, W, R, p, state0, damping):
+        dq = saved(self, q, W, R, p, state0, damping)
+        wk, starts = self._work, self._tasks_in.starts
+        levels = [Level(wk.rows[a:b].copy(), wk.errors[a:b].copy(), wk.weights[a:b].copy())
+                  for a, b in zip(starts[:-1], starts[1:])]
+        calls.append((levels, wk.lo.copy(), wk.hi.copy(), wk.dampings.copy()))
+        return dq
+
+    gsik.control.Controller._first_trial = recording
     try:
         yield
     finally:
-        gsik.control.prioritized_step = saved
+        gsik.control.Controller._first_trial = saved
 
 
 def _record(sk, posture: str, frames: int) -> list[tuple]:
-    """Every ``(levels, lo, hi, damping)`` the controller passes to its step function over the drag."""
+    """Every ``(levels, lo, hi, dampings)`` of the controller's full steps over the drag."""
     calls = []
-
-    def recording(levels, lo, hi, damping):
-        calls.append((levels, lo.copy(), hi.copy(), damping))
-        return prioritized_step(levels, lo, hi, damping)
-
     solver = _solver(sk, posture)
     poses = solver.effector_poses()
-    with _controller_step(recording):
+    with _recording(calls):
         for frame in range(frames):
             solver.step(_drag(poses, frame, 1))
     return calls
@@ -139,11 +143,7 @@ def solver_steps(sk, frames: int) -> None:
     print("| solve | rest posture | learned prior |")
     print("|---|---|---|")
     single = _step_times(sk, "none", 0, frames)
-    rows = {}
-    for label, function in (("prioritised, NumPy SVD step", prioritized_step_svd),
-                            ("prioritised, compiled step", prioritized_step)):
-        with _controller_step(function):
-            rows[label] = [_step_times(sk, posture, 1, frames) for posture in ("rest", "prior")]
+    rows = {"prioritised (compiled whole)": [_step_times(sk, posture, 1, frames) for posture in ("rest", "prior")]}
     for label, (rest, prior) in rows.items():
         print(f"| {label} | {rest:.0f} µs ({rest / single:.1f}x single) | {prior:.0f} µs ({prior / single:.1f}x) |")
     print(f"| single level (all at 0, no posture) | {single:.0f} µs | |\n")

@@ -28,10 +28,12 @@ def compile_kernels() -> float:
         solver.move_target(name, T[:3, 3], T[:3, :3])  # gsik.kernels.targets
         solver.solve(targets)
         solver.set_root("left_foot")
-    solver = gsik.Solver(biped)  # the prioritised path (gsik.kernels.priority): two levels and a posture
+    solver = gsik.Solver(biped)  # the prioritised path (gsik.kernels.control, .priority): two levels and a posture
     solver.set_posture()
     poses = solver.effector_poses()
     solver.step({n: gsik.Target.from_transform(T, priority=k % 2) for k, (n, T) in enumerate(poses.items())})
+    solver.set_balance(True)  # balance's levels are packed from Python: the step's kernels one by one
+    solver.step()
     kinematics.jacobian(biped, biped.rest)
     A = np.eye(3) * 2.0
     pgs.projected_gauss_seidel(A, np.ones(3), -np.ones(3), np.ones(3))

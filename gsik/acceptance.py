@@ -38,6 +38,7 @@ class LevelState(NamedTuple):
         converged: Every target is within the position and orientation tolerances.
         target_cost: Weighted squared error of all targets.
         error: (6 m,) the targets' error rows (target minus current), for the linearised levels.
+        lagging: A target is off by more than :data:`gsik.control.TRACKING_ERROR` times its tolerance.
     """
 
     costs: np.ndarray
@@ -46,6 +47,7 @@ class LevelState(NamedTuple):
     converged: bool
     target_cost: float
     error: np.ndarray
+    lagging: bool = False
 
 
 def anchored(state: LevelState, before: LevelState | None = None, decided: int = 0) -> LevelState:

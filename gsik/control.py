@@ -21,24 +21,39 @@ at the largest damping, or ends a run of steps that only creep
 (:mod:`gsik.stall`), holds the pose (as a refused step of the fast path does),
 and holding is remembered, so a held target settles at its best reach instead
 of jittering, and a held step costs nothing.
+
+The levels' states, their linearisation and packing, the step and its trial run compiled
+(:mod:`gsik.kernels.control`); this module keeps the acceptance rule, the damping and the rarer branches.
+What a controller is given (:class:`FrameTask`, :class:`Posture`, :class:`Balance`) lives in
+:mod:`gsik.control_inputs`.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import math
 
 import numpy as np
 
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
+from gsik.balance import center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, support_polygon
+from gsik.control_inputs import GROUND_TOLERANCE, Balance, ControlStats, FrameTask, Posture, frame_tasks, \
+    structure, support  # noqa: F401  (gsik.control's names, as before the split)
+from gsik.control_inputs import _ordered, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
+from gsik.kernels import compiled_entry
+from gsik.kernels import control as ck
 from gsik.kernels import kinematics as kernels
-from gsik.errors import SolverError
-from gsik.balance import MassModel, center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, \
-    support_polygon
+from gsik.kernels import priority as priority_kernel
 from gsik.kinematics import kinematic_model, topology
-from gsik.priority import Level, posture_factor, prioritized_step
+from gsik.priority import BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE, posture_factor
 from gsik.rotations import transform
 from gsik.stall import StallDetector, unmet_levels
 
+#: A target lags while it is off by more than this many times its tolerance (1 mm, 0.01 rad at the defaults): with
+#: ``settings.tracking_steps`` above 1 a ``Solver.step()`` then linearises again. Measured on bench_drag's studio
+#: default (pins and the bundled prior, hands dragged 6 mm a frame round a circle): one linearisation a frame kept
+#: both hands within 1 mm in 243 of 300 frames (the posture's move, flat only to first order, leaves them up to
+#: 7 mm off), up to three in 300 (a third of the frames take two).
+TRACKING_ERROR = 10.0
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
 #: Largest adaptive damping (the fast path's too): a step refused at it holds the pose.
@@ -64,68 +79,11 @@ BALANCE_BAND = 0.005
 BALANCE_TOLERANCE = 0.001
 
 
-class FrameTask(NamedTuple):
-    """A target on one frame, packed.
-
-    Attributes:
-        name: The joint or site name.
-        frame: Its frame index.
-        position: (3,) world target position [m].
-        rotation: (3, 3) world target orientation.
-        row_weight: (6,) weights of the 3 position and 3 orientation rows (0: unused).
-        priority: Level; 0 is the most important.
-    """
-
-    name: str
-    frame: int
-    position: np.ndarray
-    rotation: np.ndarray
-    row_weight: np.ndarray
-    priority: int
-
-
-class Balance(NamedTuple):
-    """What balance needs: the mass model and the feet that may carry the body.
-
-    Attributes:
-        mass: The :class:`~gsik.balance.MassModel`.
-        feet: (k,) frame index of each foot that may support the body.
-        soles: k sole polygons (c, 2) [m] in each foot frame's x-y plane.
-    """
-
-    mass: MassModel
-    feet: tuple[int, ...]
-    soles: tuple[np.ndarray, ...]
-
-
-class Posture(NamedTuple):
-    """The preferred pose ``reference`` (n_dofs,) [rad] and its precision: weights (n_dofs,) or (n_dofs, n_dofs)."""
-
-    reference: np.ndarray
-    precision: np.ndarray
-
-
-class ControlStats(NamedTuple):
-    """What a controller step did.
-
-    Attributes:
-        accepted: The step was kept.
-        held: The pose is at rest: no level would change by more than the settle tolerance, or even the
-            largest damping's step is refused (the studio's frame loop may idle).
-        converged: Every target is within the position and orientation tolerances.
-        cost: Weighted squared error ``0.5 e^T W e`` of the targets, all levels.
-        step_norm: Size of the change of ``q`` [rad].
-    """
-
-    accepted: bool
-    held: bool
-    converged: bool
-    cost: float
-    step_norm: float
-
-
 class Controller:
     """Prioritised IK steps for one skeleton seen from one root.
+
+    Every level's state and the linearised, packed levels come from compiled code (:mod:`gsik.kernels.control`):
+    without balance a step and its trial are one call. Balance's support polygon is evaluated here.
 
     Args:
         skeleton: The :class:`gsik.Skeleton` (its ``root`` the IK root).
@@ -141,9 +99,13 @@ class Controller:
         if balance is not None and not balance.feet:
             balance = None  # no foot on the ground: nothing to stand on
         self._posture = posture
+        n = skeleton.n_dofs
         # The posture's precision factored once (a learned prior's is a full matrix): each step only multiplies.
-        self._posture_factor = None if posture is None else posture_factor(posture.precision)
-        self._posture_ones = np.ones(skeleton.n_dofs)
+        self._posture_rows = ck.PostureRows(np.zeros(n), np.zeros((0, n))) if posture is None else \
+            ck.PostureRows(np.array(posture.reference, dtype=float), np.ascontiguousarray(posture_factor(
+                posture.precision)))
+        self._lower, self._upper = np.array(skeleton.lower, dtype=float), np.array(skeleton.upper, dtype=float)
+        self._tols = (RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE)
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
         self._state_cache = None  # (q, world_from_root, LevelState) of the last accepted pose
@@ -165,28 +127,45 @@ class Controller:
         self._task_level = np.array([self._levels.index(t.priority) for t in self._tasks], dtype=np.int64)
         self._balance_level = self._levels.index(BALANCE_PRIORITY) if balance is not None else -1
         m = len(self._tasks)
-        self._J = np.zeros((6 * m, skeleton.n_dofs))
         self._e = np.zeros(6 * m)
         self._err = np.zeros((2, m))
+        self._tp, self._tR = np.zeros((m, 3)), np.zeros((m, 3, 3))
         self._row_w = None  # (m, 6) set with what depends on it by retarget
+        self._target_weights = self._orientation_weight = None  # what retarget_targets made _row_w of
         self._M = np.zeros((3, 3))
         if balance is not None:
             bodies = [skeleton.frame_names[f] for f in balance.mass.body_frame]
             self._mass_kinematics = kinematic_model(skeleton, topology(skeleton, skeleton.root, bodies))
-            self._Jm = np.zeros((6 * len(balance.mass.mass), skeleton.n_dofs))
+            self._Jm = np.zeros((6 * len(balance.mass.mass), n))
         self.retarget(tasks)
 
     def retarget(self, tasks) -> None:
         """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
         ordered = _ordered(tasks)
-        tp = np.array([t.position for t in ordered]).reshape(-1, 3)
-        tR = np.array([t.rotation for t in ordered]).reshape(-1, 3, 3)
-        row_w = np.array([t.row_weight for t in ordered]).reshape(-1, 6)
-        if self._row_w is not None and np.array_equal(tp, self._tp) and np.array_equal(tR, self._tR) \
-                and np.array_equal(row_w, self._row_w):
+        self._target_weights = None
+        self._retarget(np.array([t.position for t in ordered]).reshape(-1, 3),
+                       np.array([t.rotation for t in ordered]).reshape(-1, 3, 3),
+                       np.array([t.row_weight for t in ordered]).reshape(-1, 6))
+
+    def retarget_targets(self, targets, orientation_weight: float) -> None:
+        """:meth:`retarget` from ``{name: gsik.Target}`` (the same names and priorities as the tasks built for)."""
+        ts = [targets[n] for n in self.names]
+        weights = [(t.weight, t.uses_orientation) for t in ts]
+        if weights == self._target_weights and orientation_weight == self._orientation_weight:
+            row_w = self._row_w  # the same row weights: no array to build (a drag moves targets, not weights)
+        else:
+            row_w = np.array([row_weights(t, orientation_weight) for t in ts], dtype=float).reshape(-1, 6)
+        self._retarget(np.array([t.position for t in ts]).reshape(-1, 3),
+                       np.array([t.rotation for t in ts]).reshape(-1, 3, 3), row_w)
+        self._target_weights, self._orientation_weight = weights, orientation_weight
+
+    def _retarget(self, tp: np.ndarray, tR: np.ndarray, row_w: np.ndarray) -> None:
+        """Target positions (m, 3) [m], orientations (m, 3, 3) and row weights (m, 6), in task order."""
+        same_w = _same(row_w, self._row_w)
+        if same_w and _same(tp, self._tp) and _same(tR, self._tR):
             return  # the same targets again (a held drag): what the last steps learnt still holds
-        self._tp, self._tR = tp, tR
-        if not np.array_equal(row_w, self._row_w):
+        self._tp[:], self._tR[:] = tp, tR  # in place: the kernels' inputs hold them
+        if not same_w:
             self._row_w = row_w
             self._thresholds()
         self._state_cache = self._held = None
@@ -194,33 +173,47 @@ class Controller:
         self._rest_damping = self._last_held  # a held pose's damping was learnt on the old targets: start afresh
 
     def _thresholds(self) -> None:
-        """What depends on the row weights only: each level's rows, the error bounds (2, m) of the band and of
-        convergence (inf where a row is unused), and per level (L + 1,) the cost of errors at
-        :data:`TIGHTEN_FRACTION` of the tolerances (``_floors``) and at the tolerances (``_near``)."""
+        """What depends on the row weights only: the kernels' :class:`~gsik.kernels.control.ControlTasks` (each
+        level's rows, the error bounds (2, m) of the band and of convergence, inf where a row is unused), and per
+        level (L + 1,) the cost of errors at :data:`TIGHTEN_FRACTION` of the tolerances (``_floors``) and at the
+        tolerances (``_near``)."""
         s, w = self._settings, self._row_w
         used = np.stack([w[:, 0] > 0.0, w[:, 3] > 0.0])
         tolerance = np.array([[s.position_tolerance], [s.orientation_tolerance]])
         self._tolerance = np.where(used, tolerance, np.inf)
-        self._band = 0.5 * self._tolerance
-        L, m = len(self._levels), len(self._tasks)
+        L = len(self._levels)
         rows = np.repeat(self._task_level, 6)
-        self._level_rows = [np.flatnonzero((rows == k) & (w.reshape(-1) > 0.0)) for k in range(L)]
-        self._level_weights = [w.reshape(-1)[r] for r in self._level_rows]
-        # Sums per level as one product each: 0.5 w over each level's error rows (and a last row over all of
-        # them: the targets' cost), and its tasks' two error columns.
-        self._cost_rows = np.zeros((L + 2, 6 * m))
-        self._cost_rows[rows, np.arange(6 * m)] = 0.5 * w.reshape(-1)
-        self._cost_rows[-1] = 0.5 * w.reshape(-1)
-        self._band_rows = np.zeros((L + 1, 2 * m))
-        self._band_rows[np.tile(self._task_level, 2), np.arange(2 * m)] = 1.0
+        flat = w.reshape(-1)
+        level_rows = [np.flatnonzero((rows == k) & (flat > 0.0)) if k != self._balance_level
+                      else np.array([-1, -1]) for k in range(L)]  # balance: two rows, filled per step
+        packed_row = np.concatenate(level_rows + [np.zeros(0, dtype=np.int64)]).astype(np.int64)
+        packed_weight = np.concatenate([flat[r] if r.size == 0 or r[0] >= 0 else np.zeros(2) for r in level_rows]
+                                       + [np.zeros(0)])
+        counts = [len(r) for r in level_rows] + ([self._sk.n_dofs] if self._posture is not None else [])
+        starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self._tasks_in = ck.ControlTasks(self._topo.effector_frame.astype(np.int64), self._tp, self._tR,
+                                         np.ascontiguousarray(w), self._task_level,
+                                         0.5 * self._tolerance, self._tolerance, TRACKING_ERROR * self._tolerance,
+                                         packed_row,
+                                         packed_weight, starts)
+        self._work = ck.make_work(self._sk.n_frames, self._sk.n_dofs, len(self._tasks), int(starts[-1]), L,
+                                  len(counts))
+        self._entries = {}  # compiled entry points, made at first use for these inputs
         per_task = 0.5 * TIGHTEN_FRACTION ** 2 * (w[:, 0] * s.position_tolerance ** 2
                                                   + w[:, 3] * s.orientation_tolerance ** 2)
-        floors = np.bincount(self._task_level, per_task, minlength=len(self._levels) + 1)
+        floors = np.bincount(self._task_level, per_task, minlength=L + 1)
         if self._balance is not None:
             floors[self._balance_level] = 0.5 * (TIGHTEN_FRACTION * BALANCE_TOLERANCE) ** 2
         self._floors = floors
         self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
         self._stall = StallDetector(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
+
+    def _call(self, kernel, *args):
+        """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""
+        entry = self._entries.get(kernel)
+        if entry is None:
+            entry = self._entries[kernel] = compiled_entry(kernel, *args)
+        return entry(*args)
 
     # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -239,15 +232,13 @@ class Controller:
             where = {n: k for k, n in enumerate(self.names)}
             self._layout = (effector_names, names, np.array([where.get(n, -1) for n in names], dtype=np.int64))
         _, names, index = self._layout
-        self._task_errors(R, p)
-        padded = np.zeros((2, len(self.names) + 1))  # a last column of zeros for the effectors without a target
-        padded[:, :-1] = np.where(self._tolerance < np.inf, self._err, 0.0)
-        out = padded[:, index]
+        out = np.empty((2, len(names)))
+        self._call(ck.report_errors, R, p, self._tasks_in, index, self._e, self._err, self._M, out)
         return names, out[0], out[1]
 
     def _task_errors(self, R, p) -> None:
-        kernels.effector_errors(R, p, self._topo.effector_frame, self._tp, self._tR, self._row_w, self._e, self._err,
-                                self._M)
+        self._call(kernels.effector_errors, R, p, self._tasks_in.frame, self._tp, self._tR, self._tasks_in.row_weight,
+                   self._e, self._err, self._M)
 
     def _level_state(self, q, R, p) -> LevelState:
         """The levels at ``q`` (frames ``R``, ``p``), anchored at their own costs (:class:`~gsik.acceptance.LevelState`).
@@ -256,23 +247,22 @@ class Controller:
         tolerances, balance when the centre of mass is inside the support
         polygon's margin (within :data:`BALANCE_TOLERANCE`); the posture never is (it always compares by cost).
         """
-        self._task_errors(R, p)
-        e, err = self._e.copy(), self._err
-        sums = self._cost_rows @ (e * e)
-        costs, target_cost = sums[:-1], float(sums[-1])
-        met = self._band_rows @ (err > self._band).ravel() == 0.0
-        met[-1] = False
+        wk = self._work
+        converged, target, lagging = self._call(ck.level_state, self._tasks_in, self._posture_rows, q, R, p, wk.e,
+                                                wk.err, wk.M, wk.costs, wk.met)
+        return self._state(R, p, converged, target, lagging)
+
+    def _state(self, R, p, converged: bool, target_cost: float, lagging: bool) -> LevelState:
+        """The :class:`~gsik.acceptance.LevelState` the kernels left in the work buffers (copied), with balance's
+        level evaluated at frames ``R``, ``p``."""
+        wk = self._work
+        costs, met = wk.costs.copy(), wk.met.copy()
         if self._balance is not None:
             goal, com = self._support_goal(R, p)
             outside = max(signed_distance(goal, com[:2]), 0.0)
             costs[self._balance_level] = 0.5 * outside ** 2
             met[self._balance_level] = outside <= BALANCE_TOLERANCE
-        if self._posture is not None:
-            g = q - self._posture.reference
-            P = self._posture.precision
-            costs[-1] = 0.5 * float(g @ (P * g if P.ndim == 1 else P @ g))
-        converged = not (err > self._tolerance).any()
-        return LevelState(costs, met, costs, converged, target_cost, e)
+        return LevelState(costs, met, costs, bool(converged), float(target_cost), wk.e.copy(), bool(lagging))
 
     def rank(self, q, R, p) -> tuple:
         """The levels' costs in priority order (a met level counts 0): compare poses lexicographically."""
@@ -287,28 +277,38 @@ class Controller:
         return goal, center_of_mass(b.mass, R, p)
 
     # -- the linearised levels -------------------------------------------------
-    def levels(self, q, R, p, error: np.ndarray | None = None) -> list[Level]:
-        """The linearised levels at ``q`` (frames ``R``, ``p``), in priority order, the posture last;
-        ``error`` (6 m,) the targets' errors there if known (:attr:`LevelState.error`)."""
-        if error is None:
-            self._task_errors(R, p)
-            error = self._e
-        kernels.jacobian(self._task_model, R, p, self._J)
-        out = [self._balance_level_rows(R, p) if k == self._balance_level else Level(self._J[rows], error[rows], w)
-               for k, (rows, w) in enumerate(zip(self._level_rows, self._level_weights))]
-        if self._posture is not None:
-            L = self._posture_factor  # factor_level's level, with its arrays made once
-            out.append(Level(L, L @ (self._posture.reference - q), self._posture_ones))
-        return out
+    def _linearise(self, q, R, p, error: np.ndarray) -> None:
+        """The levels linearised at ``q`` (frames ``R``, ``p``, the targets' error rows ``error`` (6 m,) there),
+        packed into the work buffers in priority order, the posture last."""
+        wk = self._work
+        self._call(ck.linearise, self._task_model, self._tasks_in, self._posture_rows, q, R, p, error, wk)
+        if self._balance is not None:
+            self._balance_rows(R, p)
 
-    def _balance_level_rows(self, R, p) -> Level:
+    def _balance_rows(self, R, p) -> None:
+        """Balance's two packed rows: the centre of mass's ground Jacobian and its way back into the support
+        polygon, or (inside the band) two rows of weight 0, which the step's kernel leaves out."""
+        wk = self._work
+        a = self._tasks_in.starts[self._balance_level]
         goal, com = self._support_goal(R, p)
-        n = self._sk.n_dofs
         if signed_distance(goal, com[:2]) <= -BALANCE_BAND:
-            return Level(np.zeros((0, n)), np.zeros(0), np.zeros(0))
+            wk.rows[a:a + 2], wk.errors[a:a + 2], wk.weights[a:a + 2] = 0.0, 0.0, 0.0
+            return
         kernels.jacobian(self._mass_kinematics, R, p, self._Jm)
-        Jc = com_jacobian(self._balance.mass, R, self._Jm)
-        return Level(Jc[:2], nearest_point_inside(goal, com[:2]) - com[:2], np.ones(2))
+        wk.rows[a:a + 2] = com_jacobian(self._balance.mass, R, self._Jm)[:2]
+        wk.errors[a:a + 2] = nearest_point_inside(goal, com[:2]) - com[:2]
+        wk.weights[a:a + 2] = 1.0
+
+    def _solve(self, q, q_from, levels: int) -> np.ndarray:
+        """The strict-priority step (n,) of the first ``levels`` packed levels, from ``q_from`` within the box whose
+        step limit counts from ``q`` (:func:`gsik.kernels.control.box`)."""
+        wk, tols = self._work, self._tols
+        self._call(ck.box, q, q_from, self._lower, self._upper, self._settings.max_step, wk.lo, wk.hi)
+        if self._call(priority_kernel.prioritized_step, wk.rows, wk.errors, wk.weights,
+                      self._tasks_in.starts[:levels + 1], wk.dampings[:levels], wk.lo, wk.hi, tols[0], tols[1],
+                      tols[2], wk.dq) != priority_kernel.OK:
+            raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
+        return wk.dq.copy()
 
     # -- one step --------------------------------------------------------------
     def step(self, q: np.ndarray, W: np.ndarray, R: np.ndarray, p: np.ndarray, lam: np.ndarray) -> ControlStats:
@@ -319,16 +319,17 @@ class Controller:
         s = self._settings
         if self._rest_damping:
             lam[0], self._rest_damping = s.damping, False
-        damping = lam[0] if s.adaptive_damping else s.damping
+        damping = float(lam[0]) if s.adaptive_damping else s.damping
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
         cached = self._state_cache
-        fresh = cached is not None and np.array_equal(cached[0], q) and np.array_equal(cached[1], W)
-        state0 = cached[2] if fresh else anchored(self._level_state(q, R, p))
+        fresh = cached is not None and _same(q, cached[0]) and _same(W, cached[1])
+        state0 = cached[2] if fresh else self._level_state(q, R, p)
         tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
-            step_norm = float(np.linalg.norm(q2 - q))
+            dq = q2 - q
+            step_norm = math.sqrt(float(dq @ dq))
             q[:], R[:], p[:] = q2, R2, p2
             state = anchored(state, state0, decided if verdict == BETTER else 0)
             self._state_cache = (q.copy(), W.copy(), state)
@@ -342,7 +343,7 @@ class Controller:
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
                                        or (not accepted and damping >= MAX_DAMPING)
                                        or self._stall.creeps(unmet_levels(state.met, self._posture is not None), state.costs))
-        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm)
+        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm, state.lagging)
         # A held pose is kept until the targets change: the same step again would hold again, and a creep that
         # was taken stops (a frame asked for anyway changes nothing).
         self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
@@ -352,45 +353,76 @@ class Controller:
     def _holds(self, q, W, damping) -> bool:
         """True if the last step held the pose ``q`` at ``W`` with this damping: a step now would do the same."""
         held = self._held
-        return held is not None and held[2] == damping and np.array_equal(held[0], q) and np.array_equal(held[1], W)
+        return held is not None and held[2] == damping and _same(q, held[0]) and _same(W, held[1])
 
     def _damped_trial(self, q, W, R, p, state0: LevelState, damping) -> tuple[int, tuple]:
         """``(halvings made, trial)``: the prioritised step from ``q``, halved up to 3 times while its
-        trial (:meth:`_trial`) is worse (with adaptive damping only); if it stays worse, the met levels'
+        trial (:meth:`_judge`) is worse (with adaptive damping only); if it stays worse, the met levels'
         correction alone (:meth:`_correction`)."""
-        dampings = self._dampings(damping, state0.costs)
-        levels = self.levels(q, R, p, state0.error)
-        box = self._box(q, q)
-        dq = prioritized_step(levels, *box, dampings)
+        dq = self._first_trial(q, W, R, p, state0, damping)
+        scale = 1.0
         for tries in range(4):
-            trial = self._trial(q, q + dq, W, state0, dampings)
+            if tries:
+                self._trial(q, dq, scale, W)
+            trial = self._judge(q, W, state0)
             if trial[0][0] != WORSE or not self._settings.adaptive_damping:
                 return tries, trial
             if tries == 0 and self._posture is not None:
-                targets = self._targets_alone(q, W, levels, box, state0, dampings)
+                targets = self._targets_alone(q, W, R, p, state0)
                 if targets is not None:
                     return 0, targets
-            dq = 0.5 * dq
-        return tries, self._correction(q, W, levels, box, state0, dampings) or trial
+            scale *= 0.5
+        return tries, self._correction(q, W, R, p, state0) or trial
 
-    def _targets_alone(self, q, W, levels, box, state0: LevelState, dampings) -> tuple | None:
+    def _first_trial(self, q, W, R, p, state0: LevelState, damping: float) -> np.ndarray:
+        """The full step (n,) from ``q`` and its trial left in the work buffers (:func:`gsik.kernels.control.step_trial`:
+        one compiled call without balance)."""
+        wk, s = self._work, self._settings
+        if self._balance is None:
+            self._call(ck.step_trial, self._task_model, self._fk_model, self._tasks_in, self._posture_rows,
+                       self._root, W, self._lower, self._upper, s.max_step, q, R, p, state0.error, state0.costs,
+                       damping, s.damping, self._near, self._tols, wk)
+            if wk.out[ck.O_STATUS] != priority_kernel.OK:
+                raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
+            return wk.dq.copy()
+        self._linearise(q, R, p, state0.error)
+        ck.dampings_into(state0.costs, self._near, damping, s.damping, self._posture is not None, wk.dampings)
+        dq = self._solve(q, q, len(wk.dampings))
+        self._trial(q, dq, 1.0, W)
+        return dq
+
+    def _trial(self, q, dq, scale: float, W) -> None:
+        """The trial ``clip(q + scale dq)``: its frames and level state into the work buffers."""
+        self._call(ck.trial, self._fk_model, self._tasks_in, self._posture_rows, self._root, W, self._lower,
+                   self._upper, q, dq, scale, self._work)
+
+    def _trial_state(self) -> tuple:
+        """``(q, R, p, LevelState)`` of the trial in the work buffers (copies)."""
+        wk = self._work
+        out = wk.out.tolist()
+        state = self._state(wk.R, wk.p, out[ck.O_CONVERGED] > 0.0, out[ck.O_TARGET_COST], out[ck.O_LAGGING] > 0.0)
+        return wk.q.copy(), wk.R.copy(), wk.p.copy(), state
+
+    def _targets_alone(self, q, W, R, p, state0: LevelState) -> tuple | None:
         """The trial of the target levels' step alone (the posture's left out), if it is better for them, else
         ``None``. A full step is worse when the posture's move, flat only to first order, costs a target level more
         than the level's own step gains (a target at a fold of its reach: a yawed head on a straight spine); halving
         it and raising the damping would then damp the target levels' own step too, and they would creep."""
-        dq = prioritized_step(levels[:-1], *box, dampings[:-1])
-        trial = self._trial(q, q + dq, W, state0, dampings, upto=len(self._levels))
+        self._linearise(q, R, p, state0.error)  # a restoring step may have linearised elsewhere since
+        self._trial(q, self._solve(q, q, len(self._levels)), 1.0, W)
+        trial = self._judge(q, W, state0, upto=len(self._levels))
         return trial if trial[0][0] == BETTER else None
 
-    def _correction(self, q, W, levels, box, state0: LevelState, dampings) -> tuple | None:
+    def _correction(self, q, W, R, p, state0: LevelState) -> tuple | None:
         """The trial of the step of the met levels above the first unmet one alone, if it tightens them (a lower
         level may lose what their correction costs it: strict priority), else ``None``. A lower level's move
         leaves them off by its second order; when that move is refused, this still closes them in."""
         k = int(np.argmin(state0.met))  # the leading met levels (the posture, last, never is)
         if k == 0 or k == len(self._levels) or not np.any(state0.costs[:k] > self._floors[:k]):
             return None
-        dq = prioritized_step(levels[:k], *box, dampings[:k])
-        trial = self._trial(q, q + dq, W, state0, dampings, upto=k)
+        self._linearise(q, R, p, state0.error)
+        self._trial(q, self._solve(q, q, k), 1.0, W)
+        trial = self._judge(q, W, state0, upto=k)
         return trial if trial[0][0] == BETTER else None
 
     def _adapt_damping(self, lam: np.ndarray, damping: float, verdict: str, accepted: bool, tries: int) -> None:
@@ -401,49 +433,26 @@ class Controller:
         elif not accepted and verdict == WORSE:
             lam[0] = min(damping * 10.0, MAX_DAMPING)
 
-    def _dampings(self, lam: float, costs: np.ndarray) -> np.ndarray:
-        """Damping per level, given its ``costs`` (L + 1,): the base one for a level within its tolerances (its
-        linear model is good there: a small error is closed at once, whatever a lower level's trouble raised
-        ``lam`` to), ``lam`` for the others, and for the posture the base one raised as ``lam`` is (so a
-        posture move refused for its second-order cost shrinks)."""
-        base = self._settings.damping
-        d = np.where(costs[:-1] <= self._near, min(base, lam), lam)
-        if self._posture is not None:
-            d = np.append(d, base * max(1.0, lam / base))
-        return d
-
-    def _box(self, q: np.ndarray, q_from: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Bounds ``lo <= dq <= hi`` (n,) of a step from ``q_from``: the limits, and the step limit counted from ``q``."""
-        s, sk = self._settings, self._sk
-        lo, hi = sk.lower - q_from, sk.upper - q_from
-        if s.max_step > 0.0:
-            lo = np.maximum(lo, q - q_from - s.max_step)
-            hi = np.minimum(hi, q - q_from + s.max_step)
-        return np.minimum(lo, 0.0), np.maximum(hi, 0.0)
-
-    def _trial(self, q, q_try, W, state0: LevelState, dampings, upto: int | None = None):
-        """``((verdict, deciding level), q, R, p, level state)`` of a trial pose (:func:`~gsik.acceptance.compare`,
-        on the levels above ``upto`` only if given). When a lower level's move breaks a met higher level (the
-        null space is only flat to first order), up to :data:`RESTORING_STEPS` restoring steps of the target
-        levels from the trial pose bring it back onto them, and that pose is judged instead."""
-        sk, settle = self._sk, self._settings.settle_tolerance
-        R2, p2 = np.empty((sk.n_frames, 3, 3)), np.empty((sk.n_frames, 3))
-        q2 = np.clip(q_try, sk.lower, sk.upper)
-        self._frames(q2, W, R2, p2)
-        state = self._level_state(q2, R2, p2)
-        verdict = compare(state0, state, settle, self._floors, upto)
+    def _judge(self, q, W, state0: LevelState, upto: int | None = None):
+        """``((verdict, deciding level), q, R, p, level state)`` of the trial in the work buffers
+        (:func:`~gsik.acceptance.compare`, on the levels above ``upto`` only if given). When a lower level's move
+        breaks a met higher level (the null space is only flat to first order), up to :data:`RESTORING_STEPS`
+        restoring steps of the target levels from the trial pose bring it back onto them, and that pose is judged
+        instead."""
+        settle = self._settings.settle_tolerance
+        first = self._trial_state()
+        verdict = compare(state0, first[3], settle, self._floors, upto)
         if verdict[0] != WORSE or self._posture is None or upto is not None:
-            return verdict, q2, R2, p2, state
-        q3, R3, p3 = q2.copy(), R2.copy(), p2.copy()
+            return (verdict,) + first
+        q3, R3, p3, state3 = first
         for _ in range(RESTORING_STEPS):
-            levels = self.levels(q3, R3, p3)[:-1]
-            q3 = np.clip(q3 + prioritized_step(levels, *self._box(q, q3), dampings[:-1]), sk.lower, sk.upper)
-            self._frames(q3, W, R3, p3)
-            state3 = self._level_state(q3, R3, p3)
+            self._linearise(q3, R3, p3, state3.error)
+            self._trial(q3, self._solve(q, q3, len(self._levels)), 1.0, W)
+            q3, R3, p3, state3 = self._trial_state()
             restored = compare(state0, state3, settle, self._floors)
             if restored[0] != WORSE:
                 return restored, q3, R3, p3, state3
-        return verdict, q2, R2, p2, state
+        return (verdict,) + first
 
     def target_cost(self, R, p) -> float:
         """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
@@ -456,44 +465,7 @@ class Controller:
         s = self._settings
         return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
 
-    def _frames(self, q, W, R, p) -> None:
-        kernels.forward_kinematics(self._fk_model, q, self._root, W, R, p)
 
-
-def _ordered(tasks) -> list[FrameTask]:
-    """Tasks by priority, then name: one order for building and retargeting."""
-    return sorted(tasks, key=lambda t: (t.priority, t.name))
-
-
-def structure(skeleton, tasks, posture, balance, settings) -> tuple:
-    """What a :class:`Controller` is built for, apart from the target values: equal keys can retarget."""
-    feet = None if balance is None else balance.feet
-    return (skeleton.root, tuple((t.name, t.priority) for t in _ordered(tasks)), id(posture), feet, id(settings))
-
-
-def frame_tasks(skeleton, targets, orientation_weight: float) -> list[FrameTask]:
-    """The :class:`FrameTask` of each ``{name: gsik.Target}``."""
-    tasks = []
-    for name, t in targets.items():
-        wp = t.weight
-        wo = wp * orientation_weight if t.uses_orientation else 0.0
-        w = np.array((wp, wp, wp, wo, wo, wo), dtype=float)
-        tasks.append(FrameTask(name, skeleton.frame_of(name), t.position, t.rotation, w, t.priority))
-    return tasks
-
-
-#: A foot whose target is within this height [m] of the standing foot is on the ground too.
-GROUND_TOLERANCE = 0.01
-
-
-def support(skeleton, targets, p: np.ndarray) -> Balance:
-    """The :class:`Balance` of ``skeleton`` seen from its root: the root foot, and every other foot with a
-    sole whose target is on the ground (the root foot's height); ``p`` (n_frames, 3) the world positions [m]."""
-    if skeleton.total_mass <= 0.0:
-        raise SolverError(f"balance needs segment masses; skeleton {skeleton.name!r} gives none "
-                          "(see skeletons/README.md: segments' mass)")
-    ground = p[skeleton.frame_of(skeleton.root)][2] if skeleton.root in skeleton.soles else 0.0
-    feet = [n for n in skeleton.soles if n == skeleton.root
-            or (n in targets and abs(targets[n].position[2] - ground) <= GROUND_TOLERANCE)]
-    return Balance(skeleton.mass_model, tuple(skeleton.frame_of(n) for n in feet),
-                   tuple(skeleton.soles[n] for n in feet))
+def _same(a: np.ndarray, b: np.ndarray | None) -> bool:
+    """True if ``b`` holds the very values of ``a`` (bit for bit: a cheaper test than ``np.array_equal``)."""
+    return a is b or (b is not None and a.shape == b.shape and a.tobytes() == b.tobytes())

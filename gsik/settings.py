@@ -23,7 +23,7 @@ PAPER_METHOD = MappingProxyType(dict(adaptive_damping=False, subspace_minimizati
 #: Largest value of each whole-number setting: far above any useful value, low enough that every call ends soon
 #: (a compiled loop cannot be interrupted, and NumPy's integers stop at int64).
 MAX_COUNTS = MappingProxyType(dict(sweeps=10_000, solve_sweeps=10_000, max_iterations=10_000, restarts=1_000,
-                                   seed=2**63 - 1))
+                                   seed=2**63 - 1, tracking_steps=100))
 
 #: Largest value of a real-valued setting (weights, tolerances, damping, step): beyond it products overflow.
 MAX_SETTING = 1e6
@@ -75,6 +75,10 @@ class SolverSettings:
             effector (a single arm or leg), where going for every row at
             once took fewer linearisations (bench_peers' 7-DOF arm: 9.5
             against 12.5, 6-DOF leg: 6 against 11, medians).
+        tracking_steps: Most prioritised steps (linearisations) one :meth:`Solver.step` makes with priorities,
+            posture or balance: another while the last was taken and left a target off by more than
+            :data:`gsik.control.TRACKING_ERROR` times its tolerance, so a dragged target keeps up (the studio's
+            default is 3). 1: one linearisation a step, as the single level's.
         warm_start: Start each frame's sweeps from the previous frame's ``dq``
             (in a solve, each linearisation's from the last step taken).
         orientation_weight: Weight of orientation rows relative to position
@@ -116,11 +120,12 @@ class SolverSettings:
     solve_max_step: float = 0.0
     restarts: int = 20
     seed: int = 0
+    tracking_steps: int = 1
 
     def __post_init__(self):
         for f in fields(self):
             object.__setattr__(self, f.name, _check_setting(f.name, f.type, getattr(self, f.name)))
-        for name in ("sweeps", "max_iterations", "solve_sweeps"):
+        for name in ("sweeps", "max_iterations", "solve_sweeps", "tracking_steps"):
             if getattr(self, name) < 1:
                 raise SolverError(f"setting {name} must be at least 1, got {getattr(self, name)!r}")
         if self.damping <= 0:

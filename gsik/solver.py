@@ -258,7 +258,8 @@ class Solver(TargetSetting, AttemptPolicy):
     # -- targets --------------------------------------------------------------
     # -- solving --------------------------------------------------------------
     def step(self, targets: Mapping[str, Target | None] | None = None) -> SolveResult:
-        """One frame: one linearisation and up to ``settings.sweeps`` PGS sweeps.
+        """One frame: one linearisation and up to ``settings.sweeps`` PGS sweeps (with priorities, posture or
+        balance, up to ``settings.tracking_steps`` prioritised steps while a target lags).
 
         ``targets`` (optional) replaces all targets first, as :meth:`set_targets`.
         """
@@ -408,21 +409,31 @@ class Solver(TargetSetting, AttemptPolicy):
     def _make_controller(self) -> control.Controller:
         """The controller for the current targets: the last one retargeted if only their values changed."""
         if self._controller is None:
-            sk = self._skeleton
-            tasks = control.frame_tasks(sk, self._targets, self._settings.orientation_weight)
+            sk, ow = self._skeleton, self._settings.orientation_weight
             balance = control.support(sk, self._targets, self._ws.p) if self._balance else None
             last = self._last_controller
-            if last is not None and last.key == control.structure(sk, tasks, self._posture, balance, self._settings):
-                last.retarget(tasks)
+            key = control.structure_of(sk.root, {n: t.priority for n, t in self._targets.items()}, self._posture,
+                                       balance, self._settings)
+            if last is not None and last.key == key:
+                last.retarget_targets(self._targets, ow)
             else:
-                last = control.Controller(sk, tasks, self._posture, balance, self._settings)
+                last = control.Controller(sk, control.frame_tasks(sk, self._targets, ow), self._posture, balance,
+                                          self._settings)
             self._controller = self._last_controller = last
         return self._controller
 
     def _control_step(self) -> SolveResult:
-        st = self._make_controller().step(self._q, self._W, self._ws.R, self._ws.p, self._ws.lam)
+        """Up to ``settings.tracking_steps`` prioritised steps (linearisations): another while the last was taken
+        and left a target lagging (:data:`gsik.control.TRACKING_ERROR`), so a dragged target is met in its frame
+        as the single level's step meets it. ``step_norm``: the whole change of the angles [rad]."""
+        c = self._make_controller()
+        for iterations in range(1, self._settings.tracking_steps + 1):
+            st = c.step(self._q, self._W, self._ws.R, self._ws.p, self._ws.lam)
+            if not st.lagging or st.held or not st.accepted:
+                break
         status = Status.CONVERGED if st.converged else Status.STALLED if st.held else Status.BUDGET_EXHAUSTED
-        return self._control_result(status, 1, st.cost, st.step_norm, 1)
+        moved = self._q - self._q_before
+        return self._control_result(status, iterations, st.cost, math.sqrt(float(moved @ moved)), 1)
 
     def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
                         attempts: int) -> SolveResult:

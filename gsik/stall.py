@@ -9,6 +9,7 @@ change no one can see. :class:`StallDetector` calls such a run of steps a stall.
 from __future__ import annotations
 
 import collections
+import math
 
 import numpy as np
 
@@ -30,8 +31,9 @@ class StallDetector:
     """
 
     def __init__(self, tolerance_norms: np.ndarray):
-        self._enough = STALL_PROGRESS * np.asarray(tolerance_norms, dtype=float)
-        # (unmet levels (K,) bool, every level's error norm (K,)) after each of the last steps taken.
+        self._enough = (STALL_PROGRESS * np.asarray(tolerance_norms, dtype=float)).tolist()
+        # (unmet levels (K,) bool, every level's error norm (K,)) after each of the last steps taken, as plain
+        # Python values: for a handful of levels a loop over them costs a fraction of NumPy's calls.
         self._history: collections.deque = collections.deque(maxlen=STALL_WINDOW + 1)
 
     def reset(self) -> None:
@@ -42,23 +44,29 @@ class StallDetector:
         """True if over the last :data:`STALL_WINDOW` steps (taken or refused) no unmet level gained enough.
 
         Args:
-            unmet: (K,) True where a level is still to be met (none: never a stall).
+            unmet: (K,) True where a level is still to be met (none: never a stall); an array or a list.
             costs: (K,) the levels' weighted squared errors ``0.5 e^T W e`` after this step.
         """
-        unmet = np.asarray(unmet, dtype=bool)
-        if not unmet.any() or (self._history and not np.array_equal(self._history[-1][0], unmet)):
+        unmet = [bool(u) for u in (unmet.tolist() if isinstance(unmet, np.ndarray) else unmet)]
+        if not any(unmet) or (self._history and self._history[-1][0] != unmet):
             self._history.clear()  # a level met or unmet anew starts the count again
-        if not unmet.any():
+        if not any(unmet):
             return False
-        norms = np.sqrt(costs)
+        norms = [math.sqrt(c) if c >= 0.0 else math.nan
+                 for c in (costs.tolist() if isinstance(costs, np.ndarray) else map(float, costs))]
         self._history.append((unmet, norms))
+        if len(self._history) <= STALL_WINDOW:
+            return False
         before = self._history[0][1]
-        enough = np.maximum(self._enough, STALL_SHRINK * before)
-        return len(self._history) > STALL_WINDOW and bool(np.all((before - norms)[unmet] < enough[unmet]))
+        for k, u in enumerate(unmet):
+            # "not (gain < enough)": a NaN gain is progress unknown, never a creep.
+            if u and not before[k] - norms[k] < max(self._enough[k], STALL_SHRINK * before[k]):
+                return False
+        return True
 
 
-def unmet_levels(met: np.ndarray, posture_on: bool) -> np.ndarray:
+def unmet_levels(met: np.ndarray, posture_on: bool) -> list[bool]:
     """(L + 1,) True for each level still to be met, from ``met`` (L + 1,): the posture (when on) always is."""
-    unmet = ~np.asarray(met, dtype=bool)
-    unmet[-1] = posture_on
+    unmet = [not m for m in np.asarray(met, dtype=bool).tolist()]
+    unmet[-1] = bool(posture_on)
     return unmet

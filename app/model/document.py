@@ -43,7 +43,7 @@ if TYPE_CHECKING:
 WORLD_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
 #: Solver settings the studio starts with (a frame's budget: a few sweeps).
-DEFAULT_SETTINGS = dict(sweeps=8, damping=1e-3)
+DEFAULT_SETTINGS = dict(sweeps=8, damping=1e-3, tracking_steps=3)  # a dragged target keeps up (gsik.control)
 
 
 class Document:

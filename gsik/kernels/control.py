@@ -1,0 +1,251 @@
+"""The prioritised step's common path compiled: level evaluation, linearisation and packing, the trial.
+
+:class:`gsik.control.Controller` judges a step by every level's state at the start pose and at the trial
+pose (:class:`gsik.acceptance.LevelState`) and solves the levels linearised at the start pose. Here those are
+compiled over named contracts, so a step is one call (:func:`step_trial`) and a halved or restoring trial one more
+(:func:`trial`):
+
+- :class:`ControlTasks`: the targets, each task's level and the bounds of its band and of convergence, and which
+  error row goes to which packed row (what depends on the row weights only).
+- :class:`PostureRows`: the posture's reference and its precision's factor ``L`` (``P = L^T L``), factored once.
+- :class:`ControlWork`: every buffer a step writes, allocated once per controller.
+
+The packed levels (:class:`gsik.priority.PackedLevels`) are the target levels in priority order (balance's two
+rows, filled by the caller, where it sits), then the posture's rows. Balance's state and rows are the caller's
+(:mod:`gsik.balance`): with balance on, the caller runs :func:`linearise`, fills its rows, then
+:func:`gsik.kernels.priority.prioritized_step` and :func:`trial`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from gsik._jit import njit
+from gsik.kernels import priority
+from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
+
+# Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
+# convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0).
+O_STATUS, O_CONVERGED, O_TARGET_COST, O_LAGGING = range(4)
+
+
+class ControlTasks(NamedTuple):
+    """The targets as the controller's kernels read them.
+
+    Attributes:
+        frame: (m,) int64 frame index of each task.
+        position: (m, 3) world target positions [m]. rotation: (m, 3, 3) world target orientations.
+        row_weight: (m, 6) weights of the 3 position and 3 orientation rows (0: unused).
+        level: (m,) int64 the level of each task (an index into the costs).
+        band: (2, m) position [m] and orientation [rad] errors within which a task counts as met (inf: unused).
+        tolerance: (2, m) the errors within which a task has converged (inf: unused).
+        lag: (2, m) the errors beyond which a task lags (inf: unused).
+        packed_row: (M_t,) int64 the error row (``6 k + r``) of each packed target row, -1 for balance's.
+        packed_weight: (M_t,) the packed target rows' weights.
+        starts: (K + 1,) int64 the packed levels' row starts (the posture's last, when on).
+    """
+
+    frame: np.ndarray
+    position: np.ndarray
+    rotation: np.ndarray
+    row_weight: np.ndarray
+    level: np.ndarray
+    band: np.ndarray
+    tolerance: np.ndarray
+    lag: np.ndarray
+    packed_row: np.ndarray
+    packed_weight: np.ndarray
+    starts: np.ndarray
+
+
+class PostureRows(NamedTuple):
+    """The posture level: minimise ``|L (q + dq - reference)|^2``.
+
+    Attributes:
+        reference: (n_dofs,) the preferred angles [rad].
+        factor: (k, n_dofs) ``L`` with ``P = L^T L`` (k = 0: no posture).
+    """
+
+    reference: np.ndarray
+    factor: np.ndarray
+
+
+class ControlWork(NamedTuple):
+    """A controller's buffers (:func:`make_work`).
+
+    Attributes:
+        J: (6m, n) the tasks' Jacobian. rows: (M, n), errors, weights: (M,) the packed levels.
+        dampings: (K,) each packed level's damping. lo, hi: (n,) the box of the step. dq: (n,) the step [rad].
+        q: (n,) the trial angles [rad]. R: (n_frames, 3, 3), p: (n_frames, 3) the trial's world frames.
+        e: (6m,) the trial's error rows. err: (2, m) its tasks' position [m] and orientation [rad] errors.
+        costs: (L + 1,) the trial's level costs, the posture's last. met: (L + 1,) bool the trial's met levels.
+        M: (3, 3) scratch. out: (4,) the trial's ``O_*`` figures.
+    """
+
+    J: np.ndarray
+    rows: np.ndarray
+    errors: np.ndarray
+    weights: np.ndarray
+    dampings: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    dq: np.ndarray
+    q: np.ndarray
+    R: np.ndarray
+    p: np.ndarray
+    e: np.ndarray
+    err: np.ndarray
+    costs: np.ndarray
+    met: np.ndarray
+    M: np.ndarray
+    out: np.ndarray
+
+
+def make_work(n_frames: int, n_dofs: int, n_tasks: int, n_packed: int, n_levels: int, n_packed_levels: int) \
+        -> ControlWork:
+    """A :class:`ControlWork` for ``n_levels`` (L) target and balance levels packed into ``n_packed`` rows of
+    ``n_packed_levels`` levels."""
+    n, m = n_dofs, n_tasks
+    return ControlWork(np.zeros((6 * m, n)), np.zeros((n_packed, n)), np.zeros(n_packed), np.zeros(n_packed),
+                       np.zeros(n_packed_levels), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+                       np.zeros((n_frames, 3, 3)), np.zeros((n_frames, 3)), np.zeros(6 * m), np.zeros((2, m)),
+                       np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(4))
+
+
+@njit(cache=True)
+def level_state(tasks, posture, q, R, p, e, err, M, costs, met):
+    """Every level's state at ``q`` (n,) [rad] with world frames ``R``, ``p``: the error rows ``e`` (6m,), the tasks'
+    errors ``err`` (2, m), ``costs`` (L + 1,) ``0.5 e^T W e`` per level and the posture's ``0.5 |L (q - ref)|^2``
+    last, ``met`` (L + 1,) (a level is met when all its tasks are within their band; the posture never is; balance's
+    are the caller's). Returns ``(converged, targets' weighted squared error, a task lags)``."""
+    effector_errors(R, p, tasks.frame, tasks.position, tasks.rotation, tasks.row_weight, e, err, M)
+    costs[:] = 0.0
+    met[:] = True
+    target = 0.0
+    converged = True
+    lagging = False
+    for k in range(tasks.frame.shape[0]):
+        c = 0.0
+        for r in range(6):
+            c += 0.5 * tasks.row_weight[k, r] * e[6 * k + r] * e[6 * k + r]
+        lv = tasks.level[k]
+        costs[lv] += c
+        target += c
+        for a in range(2):
+            if err[a, k] > tasks.band[a, k]:
+                met[lv] = False
+            if err[a, k] > tasks.tolerance[a, k]:
+                converged = False
+            if err[a, k] > tasks.lag[a, k]:
+                lagging = True
+    met[met.shape[0] - 1] = False
+    L, ref = posture.factor, posture.reference
+    g2 = 0.0
+    for i in range(L.shape[0]):
+        s = 0.0
+        for d in range(q.shape[0]):
+            s += L[i, d] * (q[d] - ref[d])
+        g2 += s * s
+    costs[costs.shape[0] - 1] = 0.5 * g2
+    return converged, target, lagging
+
+
+@njit(cache=True)
+def report_errors(R, p, tasks, index, e, err, M, out):
+    """The tasks' errors at frames ``R``, ``p`` (:func:`~gsik.kernels.kinematics.effector_errors` into ``e``,
+    ``err``) as a result reports them: ``out`` (2, k) position [m] and orientation [rad] errors of task ``index[j]``
+    in column ``j``, 0 where ``index[j]`` is -1 (no target) or the task does not use that row."""
+    effector_errors(R, p, tasks.frame, tasks.position, tasks.rotation, tasks.row_weight, e, err, M)
+    for j in range(index.shape[0]):
+        k = index[j]
+        out[0, j] = err[0, k] if k >= 0 and tasks.row_weight[k, 0] > 0.0 else 0.0
+        out[1, j] = err[1, k] if k >= 0 and tasks.row_weight[k, 3] > 0.0 else 0.0
+
+
+@njit(cache=True)
+def linearise(task_model, tasks, posture, q, R, p, e, wk):
+    """The levels linearised at ``q`` (n,) [rad] (frames ``R``, ``p``; error rows ``e`` (6m,)) packed into ``wk.rows``,
+    ``wk.errors``, ``wk.weights``: each target row's Jacobian row, error and weight, then the posture's rows ``L`` and
+    errors ``L (reference - q)`` (weight 1). Balance's rows (``packed_row`` -1) are left for the caller."""
+    jacobian(task_model, R, p, wk.J)
+    n = q.shape[0]
+    mt = tasks.packed_row.shape[0]
+    for i in range(mt):
+        r = tasks.packed_row[i]
+        if r < 0:
+            continue
+        for d in range(n):
+            wk.rows[i, d] = wk.J[r, d]
+        wk.errors[i] = e[r]
+        wk.weights[i] = tasks.packed_weight[i]
+    L, ref = posture.factor, posture.reference
+    for i in range(L.shape[0]):
+        s = 0.0
+        for d in range(n):
+            wk.rows[mt + i, d] = L[i, d]
+            s += L[i, d] * (ref[d] - q[d])
+        wk.errors[mt + i] = s
+        wk.weights[mt + i] = 1.0
+
+
+@njit(cache=True)
+def box(q, q_from, lower, upper, max_step, lo, hi):
+    """Bounds ``lo <= dq <= hi`` (n,) of a step from ``q_from``: the limits, and the step limit ``max_step`` [rad]
+    (0: none) counted from ``q``; always ``lo <= 0 <= hi``."""
+    for d in range(q.shape[0]):
+        a = lower[d] - q_from[d]
+        b = upper[d] - q_from[d]
+        if max_step > 0.0:
+            a = max(a, q[d] - q_from[d] - max_step)
+            b = min(b, q[d] - q_from[d] + max_step)
+        lo[d] = min(a, 0.0)
+        hi[d] = max(b, 0.0)
+
+
+@njit(cache=True)
+def dampings_into(costs, near, lam, base, posture_on, out):
+    """Each packed level's damping into ``out``: ``min(base, lam)`` for a level whose cost (``costs`` (L + 1,)) is
+    within ``near`` (L,), ``lam`` for the others; the posture's ``base * max(1, lam / base)``."""
+    for k in range(near.shape[0]):
+        out[k] = min(base, lam) if costs[k] <= near[k] else lam
+    if posture_on:
+        out[near.shape[0]] = base * max(1.0, lam / base)
+
+
+@njit(cache=True)
+def trial(fk, tasks, posture, root, W, lower, upper, q, dq, scale, wk):
+    """The trial ``wk.q = clip(q + scale dq, lower, upper)``: its frames, errors and level state into ``wk``
+    (``wk.out``'s :data:`O_CONVERGED`, :data:`O_TARGET_COST` and :data:`O_LAGGING`). ``fk``: the whole skeleton's
+    :class:`~gsik.kernels.KinematicModel`, ``root`` its pinned frame at ``W`` (4, 4)."""
+    for d in range(q.shape[0]):
+        wk.q[d] = min(max(q[d] + scale * dq[d], lower[d]), upper[d])
+    frames_into(fk.frame_parent, fk.frame_offset, fk.frame_rotation, fk.frame_axis, fk.frame_dof, wk.q, root, W,
+                wk.R, wk.p)
+    converged, target, lagging = level_state(tasks, posture, wk.q, wk.R, wk.p, wk.e, wk.err, wk.M, wk.costs, wk.met)
+    wk.out[O_CONVERGED] = 1.0 if converged else 0.0
+    wk.out[O_TARGET_COST] = target
+    wk.out[O_LAGGING] = 1.0 if lagging else 0.0
+
+
+@njit(cache=True)
+def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, e, costs, lam, base, near,
+               tols, wk):
+    """One prioritised step from ``q`` (n,) [rad] (frames ``R``, ``p``, error rows ``e``, level ``costs`` there) and
+    its trial, into ``wk``: the levels linearised and packed (:func:`linearise`), each one's damping
+    (:func:`dampings_into`, the adaptive ``lam`` and the ``base`` damping, ``near`` (L,)), the box (:func:`box`),
+    the step ``wk.dq`` (:func:`gsik.kernels.priority.prioritized_step`; ``tols``: its rank, box and relative box
+    tolerances, a tuple) and the trial at ``q + dq`` (:func:`trial`). ``wk.out[O_STATUS]``: the step kernel's status (no trial
+    when not OK)."""
+    linearise(task_model, tasks, posture, q, R, p, e, wk)
+    posture_on = posture.factor.shape[0] > 0
+    dampings_into(costs, near, lam, base, posture_on, wk.dampings)
+    box(q, q, lower, upper, max_step, wk.lo, wk.hi)
+    rank_tol, box_tol, box_rel_tol = tols
+    status = priority.prioritized_step(wk.rows, wk.errors, wk.weights, tasks.starts, wk.dampings, wk.lo, wk.hi,
+                                       rank_tol, box_tol, box_rel_tol, wk.dq)
+    wk.out[O_STATUS] = status
+    if status == priority.OK:
+        trial(fk, tasks, posture, root, W, lower, upper, q, wk.dq, 1.0, wk)
