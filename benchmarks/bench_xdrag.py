@@ -184,9 +184,10 @@ def _summary(rows: dict[str, list[Drag]]) -> None:
     pairs = [("character", "biped"), ("biped", "biped before"), ("character", "biped before")]
     for a, b in pairs:
         if a in fps and b in fps:
-            each = ", ".join(f"{x.fps / y.fps:.2f}" for x, y in zip(rows[a], rows[b]))
-            print(f"{a} / {b}: {fps[a] / fps[b]:.2f} of the frame rate (rounds: {each}), "
-                  f"{cpu[b] / cpu[a]:.2f} of the CPU per render inverted")
+            each = [x.fps / y.fps for x, y in zip(rows[a], rows[b])]
+            print(f"{a} / {b}: {fps[a] / fps[b]:.2f} of the frame rate, median of the rounds {np.median(each):.2f} "
+                  f"(rounds: {', '.join(f'{r:.2f}' for r in each)}), {cpu[b] / cpu[a]:.2f} of the CPU per render "
+                  "inverted")
 
 
 def main() -> None:
