@@ -1,4 +1,4 @@
-"""How the body is drawn: the mannequin or the stick figure, with the joint rings on top of either.
+"""How the body is drawn: the skinned body (the mannequin or a character) or the stick figure, joint rings on top.
 
 The rings (and the achieved effectors, triads and error lines) move to an
 overlay renderer (layer 1, same camera, its own depth buffer), so the solids
@@ -15,9 +15,8 @@ import numpy as np
 import pyvista as pv
 from vtkmodules.vtkRenderingCore import vtkRenderer
 
-from gsik_studio.mannequin import Mannequin
-from gsik_studio.model.characters import character_of
 from gsik_studio.scene import glyph_actor, points_view, rgb8, set_colors, touch
+from gsik_studio.skinned_body import body_of
 from gsik_studio.viewport import TARGET_COLOR, TARGET_RADIUS, TARGET_SELECTED_COLOR
 
 #: The ways the body can be drawn.
@@ -41,17 +40,6 @@ def overlay_renderer(plotter) -> vtkRenderer:
     return ren
 
 
-def _body(plotter, skeleton):
-    """A character's skinned body (:class:`gsik_studio.skinned_body.SkinnedBody`), else the mannequin."""
-    character = character_of(skeleton)
-    if character is None:
-        return Mannequin(plotter, skeleton)
-    from gsik.io.gltf.binding import skin_binding
-    from gsik_studio.skinned_body import SkinnedBody
-
-    return SkinnedBody(plotter, skin_binding(character))
-
-
 class BodyView:
     """The body of a viewport's document, drawn as a mannequin (default) or as sticks.
 
@@ -64,7 +52,7 @@ class BodyView:
     def __init__(self, viewport, mode: str = "mannequin"):
         self.viewport = viewport
         pl = viewport.plotter
-        self.mannequin = _body(pl, viewport.doc.skeleton)
+        self.mannequin = body_of(pl, viewport.doc.skeleton)
         self.overlay = overlay_renderer(pl)
         for name in OVERLAID:
             pl.renderer.RemoveActor(viewport.actors[name])

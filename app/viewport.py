@@ -46,6 +46,7 @@ BONE_COLOR = (0.86, 0.83, 0.76)
 ROOT_COLOR = (1.00, 0.84, 0.15)
 ERROR_LINE_COLOR = (1.00, 0.82, 0.45)
 GRID_COLOR = (0.42, 0.45, 0.50)
+FLOOR_COLOR = (44 / 255, 45 / 255, 51 / 255)
 BACKGROUND_TOP = (0.24, 0.26, 0.31)
 BACKGROUND_BOTTOM = (0.10, 0.11, 0.13)
 
@@ -125,8 +126,10 @@ class Viewport:
         self.actors["grid"] = pl.add_mesh(grid, color=GRID_COLOR, line_width=1, lighting=False, pickable=False,
                                           reset_camera=False)
         floor = pv.Plane(center=(0, 0, -0.002), direction=(0, 0, 1), i_size=4.0, j_size=4.0)
-        self.actors["floor"] = pl.add_mesh(floor, color=(0.16, 0.17, 0.20), opacity=1.0, pickable=False,
-                                           reset_camera=False, ambient=0.3)
+        # Unlit: the lit floor was this one colour from every view (no specular, camera-following directional
+        # lights), and lighting it cost about a quarter of a render under software GL.
+        self.actors["floor"] = pl.add_mesh(floor, color=FLOOR_COLOR, opacity=1.0, pickable=False,
+                                           reset_camera=False, lighting=False)
 
         # Bones: all frames as points, bones as lines between them.
         n_frames = sk.n_frames

@@ -65,12 +65,16 @@ def skin_into(binding: SkinBinding, world_from_frames: np.ndarray, points: np.nd
     Args:
         binding: The mesh's binding.
         world_from_frames: (n_frames, 4, 4) the skeleton's world transforms [m] at the pose.
-        points: (n_vertices, 3) float64, written in place [m].
-        normals: (n_vertices, 3) float64, written in place, or ``None`` to skip them.
+        points: (n_vertices, 3) float64 or float32 (a viewer's vertex buffer), written in place [m].
+        normals: (n_vertices, 3) of the same type, written in place, or ``None`` to skip them.
     """
+    blend_into(binding, np.ascontiguousarray(slot_matrices(binding, world_from_frames)), points, normals)
+
+
+def blend_into(binding: SkinBinding, M: np.ndarray, points: np.ndarray, normals: np.ndarray | None = None) -> None:
+    """:func:`skin_into` given the slot matrices ``M`` (n_slots, 3, 4) (:func:`slot_matrices`, C-contiguous)."""
     from gsik.kernels.skinning import blend_skin
 
-    M = np.ascontiguousarray(slot_matrices(binding, world_from_frames))  # (n_slots, 3, 4)
     out_normals = normals if normals is not None else np.empty_like(points)
     blend_skin(M, binding.slots, binding.weights, binding.positions, binding.normals, points, out_normals)
 

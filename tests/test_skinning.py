@@ -48,3 +48,20 @@ def test_weights_blend_the_frames_transforms_and_write_in_place():
 def test_a_binding_is_frozen():
     binding = _binding([[1.0, 0.0, 0.0]], [[0]], [[1.0]], [0], np.eye(4)[None])
     assert not binding.positions.flags.writeable and not binding.bind.flags.writeable
+
+
+def test_float32_buffers_get_the_same_skin_as_float64():
+    """A viewer's float32 vertex buffer is written in place with the float64 result, rounded."""
+    rng = np.random.default_rng(5)
+    n = 50
+    frames = np.stack([_turn([0, 0, 1], 0.4, [0.1, 0, 0]), _turn([1, 1, 0], -0.9, [0, 0.2, 1])])
+    weights = rng.uniform(0.0, 1.0, (n, 2))
+    binding = _binding(rng.normal(size=(n, 3)), np.tile([0, 1], (n, 1)), weights / weights.sum(1, keepdims=True),
+                       [0, 1], np.stack([np.eye(4), np.linalg.inv(frames[1])]))
+    points, normals = np.zeros((n, 3), np.float32), np.zeros((n, 3), np.float32)
+    buffers = (points, normals)
+    skin_into(binding, frames, points, normals)
+    assert buffers[0] is points and points.dtype == np.float32
+    expected_points, expected_normals = skinned(binding, frames)
+    np.testing.assert_allclose(points, expected_points, atol=1e-6)
+    np.testing.assert_allclose(normals, expected_normals, atol=1e-6)

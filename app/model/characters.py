@@ -58,6 +58,12 @@ def character_document(path: str | os.PathLike) -> Document:
     return Document(open_character(path).skeleton)
 
 
+def body_character(skeleton: gsik.Skeleton) -> Character:
+    """The character whose skinned body the studio draws and Export glTF writes: the one ``skeleton`` was read from,
+    else ``skeleton`` with its mannequin as the skinned mesh (:func:`gsik.io.gltf.character_from_skeleton`)."""
+    return character_of(skeleton) or character_from_skeleton(skeleton)
+
+
 def export_gltf(doc: Document, path: str | os.PathLike) -> str:
     """Write the document's clip, else its keys, else its pose as glTF, on its character (everything else of the
     file kept) or, for a skeleton that is no character, on its mannequin body; returns what was written.
@@ -68,6 +74,5 @@ def export_gltf(doc: Document, path: str | os.PathLike) -> str:
     from gsik_studio.model.transfer import export_source
 
     what, motion = export_source(doc)
-    character = character_of(doc.skeleton) or character_from_skeleton(doc.skeleton)
-    write_gltf(path, character, motion)
+    write_gltf(path, body_character(doc.skeleton), motion)
     return what

@@ -99,7 +99,7 @@ def test_only_joints_that_turn_can_be_selected(doc):
 
 @pytest.mark.parametrize("root", ["right_foot", "left_foot", "pelvis"])
 def test_every_mannequin_solid_stays_on_its_bone_in_any_pose_from_any_root(root):
-    from gsik_studio.mannequin import segment_shapes
+    from gsik.mannequin import segment_shapes
 
     sk = gsik.load_skeleton("biped")
     shapes = segment_shapes(sk)

@@ -226,3 +226,27 @@ def test_no_display_gives_one_line_and_an_exit_code(tmp_path):
     assert done.returncode == 3, done.stderr
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "no display" in lines[0] and "xvfb-run" in lines[0]
+
+
+def test_the_floor_shows_one_colour_from_every_view(window, qtbot):
+    """The floor is drawn unlit in the colour it had lit (a quarter of a software render saved, same picture)."""
+    from gsik_studio.scene import rgb8
+    from gsik_studio.viewport import FLOOR_COLOR
+
+    window.set_body("sticks")  # nothing in front of the floor but thin sticks
+    window.set_view("perspective")
+    seen = []
+    for azimuth, elevation in ((0, 0), (70, 25), (150, -10)):  # turned about the body, higher, lower
+        cam = window.plotter.camera
+        cam.Azimuth(azimuth)
+        cam.Elevation(elevation)
+        cam.OrthogonalizeViewUp()
+        image = window.plotter.screenshot(None)
+        h, w = image.shape[:2]
+        for corner in ((-0.62, -0.62), (0.62, -0.62), (-0.62, 0.62), (0.62, 0.62)):  # inside grid cells
+            x, y = (int(round(c)) for c in window.viewport.world_to_display((*corner, 0.0)))
+            if 0 <= x < w and 0 <= y < h:
+                seen.append(image[h - 1 - y, x, :3].astype(int))
+                break
+    assert len(seen) == 3  # a floor point in every picture
+    np.testing.assert_allclose(np.array(seen), np.tile(rgb8(FLOOR_COLOR), (3, 1)), atol=2)

@@ -1,9 +1,10 @@
 """Any gsik skeleton as a skinned glTF character: one node per joint, its mannequin (:mod:`gsik.mannequin`) as the mesh.
 
 The nodes are the skeleton's joints (names kept, joint 0 the scene's root), at the skeleton's rest pose, which is
-the bind pose; every mannequin vertex is bound with weight 1 to the joint that carries its solid. The file is made
-in memory and returned as a :class:`~gsik.io.gltf.character.Character`, so posing and writing it is the same
-path as for a character read from a file.
+the bind pose; every mannequin vertex is bound with weight 1 to the joint that carries its solid, its colour a
+vertex colour. The file is made in memory and returned as a :class:`~gsik.io.gltf.character.Character`, so posing
+and writing it is the same path as for a character read from a file; the studio draws the biped's body from it
+through the same skinning as a character's (``gsik_studio.skinned_body``).
 """
 
 from __future__ import annotations
@@ -12,15 +13,18 @@ from types import MappingProxyType
 
 import numpy as np
 
-from gsik.io.gltf.axes import gltf_from_gsik, xyzw_from_matrix
+from gsik.io.gltf.axes import GSIK_FROM_GLTF, gltf_from_gsik, xyzw_from_matrix
 from gsik.io.gltf.character import Character
 from gsik.io.gltf.load import gltf_library
 from gsik.io.gltf.model import GltfFile, GltfMesh, GltfNode, GltfPrimitive, GltfSkin, frozen_array
 from gsik.io.gltf.write import BlobBuilder
-from gsik.mannequin import BODY_COLOR, mannequin_mesh
+from gsik.mannequin import mannequin_mesh
 from gsik.skeleton import Skeleton
 
 _UNSIGNED_SHORT = 5123
+#: The material's base colour: white, since glTF multiplies it with the vertex colours (COLOR_0), which carry
+#: the mannequin's clay and the left side's tint.
+_BASE_COLOR = (1.0, 1.0, 1.0, 1.0)
 
 
 def _joint_of_frames(sk: Skeleton) -> np.ndarray:
@@ -84,7 +88,7 @@ def _add_body(sk: Skeleton, frames: np.ndarray, blob: BlobBuilder, nodes: list[G
     document = blob.document
     primitive, data = _body_primitive(sk, body, frames, blob)
     document.materials = [pygltflib.Material(name="mannequin", pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
-        baseColorFactor=[*BODY_COLOR, 1.0], metallicFactor=0.0, roughnessFactor=0.8))]
+        baseColorFactor=list(_BASE_COLOR), metallicFactor=0.0, roughnessFactor=0.8))]
     document.meshes = [pygltflib.Mesh(name=f"{sk.name}_body", primitives=[primitive])]
     document.nodes.append(pygltflib.Node(name=f"{sk.name}_body", mesh=0, skin=0))
     document.scenes[0].nodes.append(len(document.nodes) - 1)
@@ -96,9 +100,10 @@ def _add_body(sk: Skeleton, frames: np.ndarray, blob: BlobBuilder, nodes: list[G
 def _body_primitive(sk: Skeleton, body, frames: np.ndarray, blob: BlobBuilder) -> tuple[object, GltfPrimitive]:
     """The mannequin ``body`` as a glTF primitive (accessors added to ``blob``) and as plain data."""
     pygltflib = gltf_library()
-    file_frames = gltf_from_gsik(frames[body.carrier])  # (n_vertices, 4, 4)
-    positions = np.einsum("vij,vj->vi", file_frames[:, :3, :3], body.points) + file_frames[:, :3, 3]
-    normals = np.einsum("vij,vj->vi", file_frames[:, :3, :3], body.normals)
+    R, t = frames[body.carrier, :3, :3], frames[body.carrier, :3, 3]  # (n_vertices, 3, 3), (n_vertices, 3)
+    # World (gsik axes) at the bind pose, then the file's axes: p_file = C^T p_world.
+    positions = (np.einsum("vij,vj->vi", R, body.points) + t) @ GSIK_FROM_GLTF
+    normals = np.einsum("vij,vj->vi", R, body.normals) @ GSIK_FROM_GLTF
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
     joints = np.zeros((len(positions), 4), dtype=np.uint16)
     joints[:, 0] = _joint_of_frames(sk)[body.carrier]
@@ -113,6 +118,6 @@ def _body_primitive(sk: Skeleton, body, frames: np.ndarray, blob: BlobBuilder) -
     indices = blob.add(body.triangles.reshape(-1, 1), "SCALAR", target=34963, component=5125)
     primitive = pygltflib.Primitive(attributes=attributes, indices=indices, material=0)
     data = GltfPrimitive(frozen_array(positions), frozen_array(normals), frozen_array(body.triangles, np.int64),
-                         frozen_array(joints, np.int64), frozen_array(weights), frozen_array([*BODY_COLOR, 1.0]), 0,
+                         frozen_array(joints, np.int64), frozen_array(weights), frozen_array(_BASE_COLOR), 0,
                          frozen_array(body.colors))
     return primitive, data
