@@ -163,3 +163,41 @@ def test_a_characters_knee_pole_dragged_with_the_mouse_swings_the_knee(qtbot, wi
     assert np.linalg.norm(doc.effector_poses()[pelvis][:3, 3] - at) < 1e-3
     other = limb_of(doc.skeleton, character.poles["right_knee"])
     assert abs(swing_angle(other, P0, P)) < np.radians(1.0)
+
+
+def _screen_point(window, world) -> tuple[int, int]:
+    """The X screen pixel (x, y) of a world point in the window's 3D view."""
+    from PySide6 import QtCore
+
+    pl = window.plotter
+    x, y = window.viewport.world_to_display(world)
+    ratio = pl.devicePixelRatioF()
+    p = pl.mapToGlobal(QtCore.QPoint(int(round(x / ratio)), int(round(pl.height() - y / ratio - 1))))
+    return p.x(), p.y()
+
+
+def test_each_character_is_posed_by_a_drag_of_the_x_pointer(qtbot, character_window):
+    """The drag an artist makes: X pointer events (xdotool, a separate process) through the X server, Qt and VTK's
+    sphere widget onto the character's left-hand target; the hand follows it and the skinned body with it."""
+    from test_wheel_window import _x
+
+    window, character = character_window
+    doc, mesh = window.doc, window.body.mannequin.meshes[0]
+    wait_for(qtbot, lambda: not doc.needs_solving)
+    name = character.effectors["left_hand"]
+    start = np.array(doc.targets[name].position)
+    hand = doc.effector_poses()[name][:3, 3].copy()
+    before = np.array(mesh.polydata.points)
+    x, y = _screen_point(window, start)
+    moves = []
+    for k in range(1, 11):
+        moves += ["mousemove", str(x - 7 * k), str(y - 6 * k), "sleep", "0.05"]
+    window.activateWindow()
+    _x(qtbot, "mousemove", str(x), str(y), "sleep", "0.3", "mousedown", "1", "sleep", "0.2", *moves, "mouseup", "1")
+    wait_for(qtbot, lambda: np.linalg.norm(doc.targets[name].position - start) > 0.05)
+    moved = np.array(doc.targets[name].position)
+    assert doc.history.undo_text.startswith("Move"), doc.history.undo_text
+    wait_for(qtbot, lambda: np.linalg.norm(doc.effector_poses()[name][:3, 3] - moved)
+             < 0.5 * np.linalg.norm(hand - moved))
+    wait_for(qtbot, lambda: np.abs(mesh.polydata.points - before).max() > 0.02)
+    np.testing.assert_allclose(mesh.polydata.points, skinned(skin_binding(character), _frames(doc))[0], atol=1e-6)
