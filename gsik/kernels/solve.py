@@ -232,7 +232,8 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     (see the module's docstring); the best pose is kept. Sets
     ``ws.stats[O_STATUS]`` (converged; stalled: a best reach; budget
     exhausted), ``O_ITERATIONS`` (linearisations), ``O_SWEEPS``, ``O_COST``,
-    ``O_STEP_NORM``, ``O_FINITE``. ``settings.sweeps`` are the sweeps per linearisation.
+    ``O_STEP_NORM``, ``O_FINITE``. ``settings.sweeps`` are the sweeps per linearisation. The buffers are made
+    once per attempt (:func:`~gsik.kernels.make_scratch`).
     """
     for i in range(q.shape[0]):  # the start, clamped into the limits
         q[i] = min(max(q[i], model.lower[i]), model.upper[i])

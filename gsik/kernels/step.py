@@ -77,7 +77,10 @@ def _bounds(q, lower, upper, max_step, lo, hi):
 
 @njit(cache=True, inline="always")
 def _evaluate(model, targets, root, W, q, R, p, e, err, M):
-    """Frames ``R``, ``p`` at ``q``, the error vector ``e`` and errors ``err``; returns the weighted cost."""
+    """Frames ``R``, ``p`` at ``q``, the error vector ``e`` and errors ``err``; returns the weighted cost.
+
+    The step's one forward kinematics (the frames at the incoming ``q`` are the last step's): the frames it leaves
+    become the state when the step is taken."""
     frames_into(model.frame_parent, model.frame_offset, model.frame_rotation, model.frame_axis, model.frame_dof,
                 q, root, W, R, p)
     return effector_errors(R, p, model.effector_frame, targets.position, targets.rotation, targets.row_weight,
