@@ -22,10 +22,8 @@ at the largest damping, or ends a run of steps that only creep
 and holding is remembered, so a held target settles at its best reach instead
 of jittering, and a held step costs nothing.
 
-The levels' states, their linearisation and packing, the step and its trial run compiled
-(:mod:`gsik.kernels.control`); this module keeps the acceptance rule, the damping and the rarer branches.
-What a controller is given (:class:`FrameTask`, :class:`Posture`, :class:`Balance`) lives in
-:mod:`gsik.control_inputs`.
+The common step (no balance, the full step's trial better at once) is one compiled call (:mod:`gsik.kernels.accept`
+over :mod:`gsik.kernels.control`); this module keeps the rarer branches. Its inputs live in :mod:`gsik.control_inputs`.
 """
 
 from __future__ import annotations
@@ -40,13 +38,13 @@ from gsik.control_inputs import GROUND_TOLERANCE, Balance, ControlStats, FrameTa
     structure, support  # noqa: F401  (gsik.control's names, as before the split)
 from gsik.control_inputs import _ordered, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
 from gsik.kernels import compiled_entry
+from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
 from gsik.kernels import kinematics as kernels
 from gsik.kernels import priority as priority_kernel
 from gsik.kinematics import kinematic_model, topology
 from gsik.priority import BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE, posture_factor
 from gsik.rotations import transform
-from gsik.stall import StallDetector, unmet_levels
 
 #: A target lags while it is off by more than this many times its tolerance (1 mm, 0.01 rad at the defaults): with
 #: ``settings.tracking_steps`` above 1 a ``Solver.step()`` then linearises again. Measured on bench_drag's studio
@@ -108,7 +106,6 @@ class Controller:
         self._tols = (RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE)
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
-        self._state_cache = None  # (q, world_from_root, LevelState) of the last accepted pose
         self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
         self._rest_damping = self._last_held = False  # start from the base damping; the last step held the pose
         self._layout = None  # (effector names, result names, task index of each) for results
@@ -168,8 +165,8 @@ class Controller:
         if not same_w:
             self._row_w = row_w
             self._thresholds()
-        self._state_cache = self._held = None
-        self._stall.reset()
+        self._cache.flags[ak.F_VALID], self._held = 0.0, None
+        self._window.ring[:] = 0
         self._rest_damping = self._last_held  # a held pose's damping was learnt on the old targets: start afresh
 
     def _thresholds(self) -> None:
@@ -206,7 +203,8 @@ class Controller:
             floors[self._balance_level] = 0.5 * (TIGHTEN_FRACTION * BALANCE_TOLERANCE) ** 2
         self._floors = floors
         self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
-        self._stall = StallDetector(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
+        self._window = ak.make_window(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
+        self._cache = ak.make_cache(self._sk.n_dofs, len(self._tasks), L)  # the last accepted pose's levels
 
     def _call(self, kernel, *args):
         """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""
@@ -314,52 +312,82 @@ class Controller:
     def step(self, q: np.ndarray, W: np.ndarray, R: np.ndarray, p: np.ndarray, lam: np.ndarray) -> ControlStats:
         """One prioritised step from ``q`` (n_dofs,) [rad], in place on ``q``, ``R``, ``p`` and ``lam`` (1,).
 
-        ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
-        """
+        ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4). Without balance, the start
+        state, the step, its trial and a better trial's commit are one compiled call
+        (:func:`gsik.kernels.accept.control_step`)."""
         s = self._settings
         if self._rest_damping:
             lam[0], self._rest_damping = s.damping, False
         damping = float(lam[0]) if s.adaptive_damping else s.damping
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
-        cached = self._state_cache
-        fresh = cached is not None and _same(q, cached[0]) and _same(W, cached[1])
-        state0 = cached[2] if fresh else self._level_state(q, R, p)
-        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
+        if self._balance is None and s.adaptive_damping:
+            self._call(ak.control_step, self._task_model, self._fk_model, self._tasks_in, self._posture_rows,
+                       self._root, W, self._lower, self._upper, s.max_step, q, R, p, lam, damping, s.damping,
+                       self._near, self._tols, self._floors, (float(s.settle_tolerance), DAMPING_FALL, DAMPING_FLOOR),
+                       self._cache, self._window, self._work)
+            out = self._cache.out.tolist()
+            if out[ak.R_STATUS] != priority_kernel.OK:
+                raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
+            if out[ak.R_COMMITTED]:
+                return self._committed(q, W, lam)
+            fresh = out[ak.R_FRESH] > 0.0
+            state0 = ak.cached_state(self._cache) if fresh else ak.start_state(self._cache, out)
+            first = self._work.dq.copy()
+        else:
+            fresh = self._call(ak.is_fresh, self._cache, q, W)
+            state0 = ak.cached_state(self._cache) if fresh else self._level_state(q, R, p)
+            if not fresh:
+                self._window.ring[:] = 0  # the pose changed from outside
+            first = self._first_trial(q, W, R, p, state0, damping)
+        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
             dq = q2 - q
             step_norm = math.sqrt(float(dq @ dq))
             q[:], R[:], p[:] = q2, R2, p2
             state = anchored(state, state0, decided if verdict == BETTER else 0)
-            self._state_cache = (q.copy(), W.copy(), state)
+            ak.store(self._cache, q, W, state)
         else:
             step_norm, state = 0.0, state0
         self._adapt_damping(lam, damping, verdict, accepted, tries)
         # Held: nothing would change, or even the largest damping's step is refused (the fast path's stall), or
         # the steps only creep (gsik.stall).
-        if not fresh:
-            self._stall.reset()  # the pose changed from outside
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
-                                       or (not accepted and damping >= MAX_DAMPING)
-                                       or self._stall.creeps(unmet_levels(state.met, self._posture is not None), state.costs))
-        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm, state.lagging)
-        # A held pose is kept until the targets change: the same step again would hold again, and a creep that
-        # was taken stops (a frame asked for anyway changes nothing).
-        self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
-        self._last_held = held
+                                       or (not accepted and damping >= MAX_DAMPING) or self._creeps(state))
+        return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
+                                                   state.lagging))
+
+    def _committed(self, q, W, lam) -> ControlStats:
+        """The stats of a step :func:`gsik.kernels.accept.control_step` committed (better on its first trial)."""
+        c, s = self._cache, self._settings
+        step_norm = math.sqrt(float(c.moved @ c.moved))
+        held = step_norm <= s.stall_tolerance or self._call(ak.creeps, self._window, c.met, self._posture is not None,
+                                                             c.costs)
+        flags = c.flags.tolist()
+        return self._stats(q, W, lam, ControlStats(True, held, flags[ak.F_CONVERGED] > 0.0, flags[ak.F_TARGET_COST],
+                                                   step_norm, flags[ak.F_LAGGING] > 0.0))
+
+    def _stats(self, q, W, lam, stats: ControlStats) -> ControlStats:
+        """``stats``; a held pose is kept until the targets change (a frame asked for anyway changes nothing)."""
+        self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if stats.held else None
+        self._last_held = stats.held
         return stats
+
+    def _creeps(self, state: LevelState) -> bool:
+        """The stall window (:func:`gsik.kernels.accept.creeps`) after a step that left the levels at ``state``."""
+        return self._call(ak.creeps, self._window, np.ascontiguousarray(state.met, dtype=np.bool_),
+                          self._posture is not None, np.ascontiguousarray(state.costs, dtype=float))
 
     def _holds(self, q, W, damping) -> bool:
         """True if the last step held the pose ``q`` at ``W`` with this damping: a step now would do the same."""
         held = self._held
         return held is not None and held[2] == damping and _same(q, held[0]) and _same(W, held[1])
 
-    def _damped_trial(self, q, W, R, p, state0: LevelState, damping) -> tuple[int, tuple]:
-        """``(halvings made, trial)``: the prioritised step from ``q``, halved up to 3 times while its
-        trial (:meth:`_judge`) is worse (with adaptive damping only); if it stays worse, the met levels'
-        correction alone (:meth:`_correction`)."""
-        dq = self._first_trial(q, W, R, p, state0, damping)
+    def _damped_trial(self, q, W, R, p, state0: LevelState, dq: np.ndarray) -> tuple[int, tuple]:
+        """``(halvings made, trial)``: the prioritised step ``dq`` (n,) from ``q`` (its full trial in the work
+        buffers), halved up to 3 times while its trial (:meth:`_judge`) is worse (with adaptive damping only); if
+        it stays worse, the met levels' correction alone (:meth:`_correction`)."""
         scale = 1.0
         for tries in range(4):
             if tries:
