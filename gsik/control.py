@@ -91,6 +91,9 @@ class Controller:
         settings: The :class:`gsik.SolverSettings`.
     """
 
+    #: False: every step through the Python branches (the reference the compiled common path is tested against).
+    compiled_step = True
+
     def __init__(self, skeleton, tasks, posture: Posture | None, balance: Balance | None, settings):
         self._sk = skeleton
         self._settings = settings
@@ -321,19 +324,19 @@ class Controller:
         damping = float(lam[0]) if s.adaptive_damping else s.damping
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
-        if self._balance is None and s.adaptive_damping:
+        if self._balance is None and s.adaptive_damping and self.compiled_step:
             self._call(ak.control_step, self._task_model, self._fk_model, self._tasks_in, self._posture_rows,
                        self._root, W, self._lower, self._upper, s.max_step, q, R, p, lam, damping, s.damping,
                        self._near, self._tols, self._floors, (float(s.settle_tolerance), DAMPING_FALL, DAMPING_FLOOR),
-                       self._cache, self._window, self._work)
+                       RESTORING_STEPS if self._posture is not None else 0, float(s.stall_tolerance), self._cache,
+                       self._window, self._work)
             out = self._cache.out.tolist()
             if out[ak.R_STATUS] != priority_kernel.OK:
                 raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
             if out[ak.R_COMMITTED]:
-                return self._committed(q, W, lam)
-            fresh = out[ak.R_FRESH] > 0.0
-            state0 = ak.cached_state(self._cache) if fresh else ak.start_state(self._cache, out)
-            first = self._work.dq.copy()
+                return self._committed(q, W, lam, out[ak.R_CREEPS])
+            state0 = ak.cached_state(self._cache) if out[ak.R_FRESH] > 0.0 else ak.start_state(self._cache, out)
+            first = self._first_trial(q, W, R, p, state0, damping) if out[ak.R_RESTORED] else self._work.dq.copy()
         else:
             fresh = self._call(ak.is_fresh, self._cache, q, W)
             state0 = ak.cached_state(self._cache) if fresh else self._level_state(q, R, p)
@@ -351,33 +354,31 @@ class Controller:
         else:
             step_norm, state = 0.0, state0
         self._adapt_damping(lam, damping, verdict, accepted, tries)
-        # Held: nothing would change, or even the largest damping's step is refused (the fast path's stall), or
-        # the steps only creep (gsik.stall).
+        # Held: nothing would change, the largest damping's step is refused, or the steps only creep (gsik.stall).
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
-                                       or (not accepted and damping >= MAX_DAMPING) or self._creeps(state))
+                                       or (not accepted and damping >= MAX_DAMPING) or self._call(
+                                           ak.creeps, self._window, state.met, self._posture is not None, state.costs))
         return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
                                                    state.lagging))
 
-    def _committed(self, q, W, lam) -> ControlStats:
-        """The stats of a step :func:`gsik.kernels.accept.control_step` committed (better on its first trial)."""
+    def _committed(self, q, W, lam, creeps: float) -> ControlStats:
+        """The stats of a step :func:`gsik.kernels.accept.control_step` committed (better on its first trial; its
+        ``R_CREEPS`` figure ``creeps``)."""
         c, s = self._cache, self._settings
-        step_norm = math.sqrt(float(c.moved @ c.moved))
-        held = step_norm <= s.stall_tolerance or self._call(ak.creeps, self._window, c.met, self._posture is not None,
-                                                             c.costs)
+        step_norm = math.sqrt(float(c.moved @ c.moved))  # NumPy's sum, as a step of the Python branches
+        if creeps < 0.0:  # the norm, within rounding of the tolerance, decides whether the window is asked
+            creeps = not step_norm <= s.stall_tolerance and self._call(ak.creeps, self._window, c.met,
+                                                                  self._posture is not None, c.costs)
         flags = c.flags.tolist()
-        return self._stats(q, W, lam, ControlStats(True, held, flags[ak.F_CONVERGED] > 0.0, flags[ak.F_TARGET_COST],
-                                                   step_norm, flags[ak.F_LAGGING] > 0.0))
+        return self._stats(q, W, lam, ControlStats(True, step_norm <= s.stall_tolerance or creeps > 0.0,
+                                                   flags[ak.F_CONVERGED] > 0.0, flags[ak.F_TARGET_COST], step_norm,
+                                                   flags[ak.F_LAGGING] > 0.0))
 
     def _stats(self, q, W, lam, stats: ControlStats) -> ControlStats:
         """``stats``; a held pose is kept until the targets change (a frame asked for anyway changes nothing)."""
         self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if stats.held else None
         self._last_held = stats.held
         return stats
-
-    def _creeps(self, state: LevelState) -> bool:
-        """The stall window (:func:`gsik.kernels.accept.creeps`) after a step that left the levels at ``state``."""
-        return self._call(ak.creeps, self._window, np.ascontiguousarray(state.met, dtype=np.bool_),
-                          self._posture is not None, np.ascontiguousarray(state.costs, dtype=float))
 
     def _holds(self, q, W, damping) -> bool:
         """True if the last step held the pose ``q`` at ``W`` with this damping: a step now would do the same."""
@@ -403,8 +404,7 @@ class Controller:
         return tries, self._correction(q, W, R, p, state0) or trial
 
     def _first_trial(self, q, W, R, p, state0: LevelState, damping: float) -> np.ndarray:
-        """The full step (n,) from ``q`` and its trial left in the work buffers (:func:`gsik.kernels.control.step_trial`:
-        one compiled call without balance)."""
+        """The full step (n,) from ``q``, its trial left in the work buffers (one compiled call without balance)."""
         wk, s = self._work, self._settings
         if self._balance is None:
             self._call(ck.step_trial, self._task_model, self._fk_model, self._tasks_in, self._posture_rows,

@@ -25,17 +25,23 @@ import numpy as np
 from gsik._jit import njit
 from gsik.acceptance import LevelState
 from gsik.kernels import priority
-from gsik.kernels.control import O_CONVERGED, O_LAGGING, O_STATUS, O_TARGET_COST, level_state, step_trial
+from gsik.kernels.control import O_CONVERGED, O_LAGGING, O_STATUS, O_TARGET_COST, box, level_state, linearise, \
+    step_trial, trial
 from gsik.stall import STALL_PROGRESS, STALL_SHRINK, STALL_WINDOW
 
-#: Verdict codes of :func:`compare_levels`, in the order of :data:`gsik.acceptance.VERDICTS`.
+#: Verdict codes of :func:`compare_levels`: :data:`gsik.acceptance.BETTER`, ``SAME``, ``WORSE`` in that order.
 V_BETTER, V_SAME, V_WORSE = range(3)
 # Indices of LevelCache.flags: the cache holds a state; that state's convergence, targets' cost, lagging (1.0 / 0.0).
 F_VALID, F_CONVERGED, F_TARGET_COST, F_LAGGING = range(4)
 # Indices of LevelCache.out (control_step's report): the start state was cached; the verdict code and deciding level
-# of the first trial; the trial was committed; the step kernel's status; an evaluated start state's convergence,
-# targets' cost and lagging (1.0 / 0.0).
-R_FRESH, R_VERDICT, R_DECIDED, R_COMMITTED, R_STATUS, R_CONVERGED0, R_TARGET_COST0, R_LAGGING0 = range(8)
+# of the last trial judged; the trial was committed; the step kernel's status; an evaluated start state's convergence,
+# targets' cost and lagging (1.0 / 0.0); after a commit, the stall window's verdict (1.0 creeps, 0.0 not, -1.0 not
+# asked: the step's norm is within rounding of the stall tolerance, NumPy's norm decides); restoring steps were made
+# (1.0: the work buffers no longer hold the first trial).
+R_FRESH, R_VERDICT, R_DECIDED, R_COMMITTED, R_STATUS, R_CONVERGED0, R_TARGET_COST0, R_LAGGING0, R_CREEPS, \
+    R_RESTORED = range(10)
+#: A committed step's norm summed in loop order is within this fraction of NumPy's (BLAS's order).
+NORM_ROUNDING = 1e-12
 
 
 class LevelCache(NamedTuple):
@@ -46,7 +52,7 @@ class LevelCache(NamedTuple):
         costs, anchors: (L + 1,) the levels' costs and anchors there. met: (L + 1,) bool the met levels.
         e: (6m,) the targets' error rows there. flags: (4,) the ``F_*`` figures.
         costs0: (L + 1,), met0: (L + 1,) bool, e0: (6m,): the state of a start pose that is not the cached one.
-        moved: (n,) the committed step's change of the angles [rad]. out: (8,) :func:`control_step`'s ``R_*``.
+        moved: (n,) the committed step's change of the angles [rad]. out: (10,) :func:`control_step`'s ``R_*``.
     """
 
     q: np.ndarray
@@ -68,7 +74,7 @@ def make_cache(n_dofs: int, n_tasks: int, n_levels: int) -> LevelCache:
     k = n_levels + 1
     return LevelCache(np.zeros(n_dofs), np.zeros((4, 4)), np.zeros(k), np.zeros(k, dtype=np.bool_), np.zeros(k),
                       np.zeros(6 * n_tasks), np.zeros(4), np.zeros(k), np.zeros(k, dtype=np.bool_),
-                      np.zeros(6 * n_tasks), np.zeros(n_dofs), np.zeros(8))
+                      np.zeros(6 * n_tasks), np.zeros(n_dofs), np.zeros(10))
 
 
 def cached_state(cache: LevelCache) -> LevelState:
@@ -223,12 +229,15 @@ def _same_bits(a, b):
 
 @njit(cache=True)
 def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, lam, damping, base, near,
-                 tols, floors, rule, cache, window, wk):
+                 tols, floors, rule, restoring, stall_tolerance, cache, window, wk):
     """One prioritised step without balance from ``q`` (n,) [rad] (frames ``R``, ``p``; ``lam`` (1,) the adaptive
     damping, ``damping`` this step's): the start state (``cache``'s when :func:`is_fresh`, else evaluated into its
     ``*0`` buffers and the stall ``window`` reset), the step and its trial (:func:`step_trial`), the rule
-    (:func:`compare_levels`; ``rule``: (settle fraction, damping fall, damping floor)); a better trial is committed:
-    ``q``, ``R``, ``p`` moved to it (``cache.moved`` the change), anchored into ``cache``, ``lam[0]`` lowered.
+    (:func:`compare_levels`; ``rule``: (settle fraction, damping fall, damping floor)), and while a trial is worse up
+    to ``restoring`` restoring steps of the target levels from it (``gsik.control.Controller._judge``'s, for a
+    posture's move that broke a met level); a better trial is committed:
+    ``q``, ``R``, ``p`` moved to it (``cache.moved`` the change), anchored into ``cache``, ``lam[0]`` lowered, and
+    unless the change's norm is at most ``stall_tolerance`` [rad] the stall ``window`` asked (:func:`creeps`).
     ``cache.out``: the ``R_*`` figures."""
     settle, fall, floor = rule
     fresh = is_fresh(cache, q, W)
@@ -249,6 +258,14 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     if wk.out[O_STATUS] != priority.OK:
         return
     verdict, decided = compare_levels(c0, anchors0, met0, wk.costs, wk.met, floors, settle, floors.shape[0])
+    out[R_RESTORED] = 0.0
+    if verdict == V_WORSE and restoring > 0:
+        out[R_RESTORED] = 1.0
+        verdict, decided = _restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols,
+                                    restoring, c0, anchors0, met0, floors, settle, wk)
+        if verdict < 0:
+            out[R_STATUS] = -verdict - 1
+            return
     out[R_VERDICT], out[R_DECIDED] = verdict, decided
     if verdict != V_BETTER:
         return
@@ -271,3 +288,36 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     lowered = damping * fall
     lam[0] = low if low > lowered else lowered  # Python's max(lowered, low)
     out[R_COMMITTED] = 1.0
+    out[R_CREEPS] = -1.0
+    moved = 0.0
+    for d in range(q.shape[0]):
+        moved += cache.moved[d] * cache.moved[d]
+    moved = math.sqrt(moved)
+    if moved > stall_tolerance * (1.0 + NORM_ROUNDING):  # above it in any summation order: the window decides
+        out[R_CREEPS] = 1.0 if creeps(window, cache.met, posture.factor.shape[0] > 0, cache.costs) else 0.0
+    elif moved < stall_tolerance * (1.0 - NORM_ROUNDING):
+        out[R_CREEPS] = 0.0  # held by its norm alone: the window is not asked
+
+
+@njit(cache=True)
+def _restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols, restoring, c0, anchors0,
+             met0, floors, settle, wk):
+    """Up to ``restoring`` steps of the target levels (the first ``L`` packed levels, ``near`` (L,)) linearised at
+    the trial in ``wk``, each from there within the box counted from ``q``, until a trial is no worse than the start
+    (``c0``, ``anchors0``, ``met0``). Returns :func:`compare_levels`'s ``(verdict, level)`` of the last trial, or
+    ``(-1 - status, 0)`` when the step kernel's status is not OK."""
+    rank_tol, box_tol, box_rel_tol = tols
+    L = near.shape[0]
+    verdict, decided = V_WORSE, 0
+    for _ in range(restoring):
+        linearise(task_model, tasks, posture, wk.q, wk.R, wk.p, wk.e, wk)
+        box(q, wk.q, lower, upper, max_step, wk.lo, wk.hi)
+        status = priority.prioritized_step(wk.rows, wk.errors, wk.weights, tasks.starts[:L + 1], wk.dampings[:L],
+                                           wk.lo, wk.hi, rank_tol, box_tol, box_rel_tol, wk.dq)
+        if status != priority.OK:
+            return -1 - status, 0
+        trial(fk, tasks, posture, root, W, lower, upper, wk.q, wk.dq, 1.0, wk)
+        verdict, decided = compare_levels(c0, anchors0, met0, wk.costs, wk.met, floors, settle, floors.shape[0])
+        if verdict != V_WORSE:
+            break
+    return verdict, decided
