@@ -155,8 +155,9 @@ class Controller:
             row_w = self._row_w  # the same row weights: no array to build (a drag moves targets, not weights)
         else:
             row_w = np.array([row_weights(t, orientation_weight) for t in ts], dtype=float).reshape(-1, 6)
-        self._retarget(np.array([t.position for t in ts]).reshape(-1, 3),
-                       np.array([t.rotation for t in ts]).reshape(-1, 3, 3), row_w)
+        self._retarget(  # a Target's position and rotation are float64: their bytes joined, the (m, 3), (m, 3, 3)
+            np.frombuffer(b"".join([t.position.tobytes() for t in ts])).reshape(-1, 3),
+            np.frombuffer(b"".join([t.rotation.tobytes() for t in ts])).reshape(-1, 3, 3), row_w)
         self._target_weights, self._orientation_weight = weights, orientation_weight
 
     def _retarget(self, tp: np.ndarray, tR: np.ndarray, row_w: np.ndarray) -> None:
@@ -216,7 +217,6 @@ class Controller:
             entry = self._entries[kernel] = compiled_entry(kernel, *args)
         return entry(*args)
 
-    # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Position [m] and orientation [rad] error (m,) of each task (0 where a row is unused)."""
         self._task_errors(R, p)
