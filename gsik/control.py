@@ -334,16 +334,20 @@ class Controller:
             if out[ak.R_STATUS] != priority_kernel.OK:
                 raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
             if out[ak.R_COMMITTED]:
-                return self._committed(q, W, lam, out[ak.R_CREEPS])
+                return self._stats(q, W, lam, ak.committed_stats(self._cache, self._window, self._posture is not None,
+                                                                 s.stall_tolerance))
             state0 = ak.cached_state(self._cache) if out[ak.R_FRESH] > 0.0 else ak.start_state(self._cache, out)
-            first = self._first_trial(q, W, R, p, state0, damping) if out[ak.R_RESTORED] else self._work.dq.copy()
+            first, judged = self._work.dq.copy(), None
+            if out[ak.R_RESTORED]:  # the full step's trial and its restoring steps judged no better: only the verdict
+                judged = ((ak.VERDICTS[int(out[ak.R_VERDICT])], 0), None, None, None, None)
+                first = self._cache.dq0.copy()
         else:
             fresh = self._call(ak.is_fresh, self._cache, q, W)
             state0 = ak.cached_state(self._cache) if fresh else self._level_state(q, R, p)
             if not fresh:
                 self._window.ring[:] = 0  # the pose changed from outside
-            first = self._first_trial(q, W, R, p, state0, damping)
-        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first)
+            first, judged = self._first_trial(q, W, R, p, state0, damping), None
+        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first, judged)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
             dq = q2 - q
@@ -361,19 +365,6 @@ class Controller:
         return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
                                                    state.lagging))
 
-    def _committed(self, q, W, lam, creeps: float) -> ControlStats:
-        """The stats of a step :func:`gsik.kernels.accept.control_step` committed (better on its first trial; its
-        ``R_CREEPS`` figure ``creeps``)."""
-        c, s = self._cache, self._settings
-        step_norm = math.sqrt(float(c.moved @ c.moved))  # NumPy's sum, as a step of the Python branches
-        if creeps < 0.0:  # the norm, within rounding of the tolerance, decides whether the window is asked
-            creeps = not step_norm <= s.stall_tolerance and self._call(ak.creeps, self._window, c.met,
-                                                                  self._posture is not None, c.costs)
-        flags = c.flags.tolist()
-        return self._stats(q, W, lam, ControlStats(True, step_norm <= s.stall_tolerance or creeps > 0.0,
-                                                   flags[ak.F_CONVERGED] > 0.0, flags[ak.F_TARGET_COST], step_norm,
-                                                   flags[ak.F_LAGGING] > 0.0))
-
     def _stats(self, q, W, lam, stats: ControlStats) -> ControlStats:
         """``stats``; a held pose is kept until the targets change (a frame asked for anyway changes nothing)."""
         self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if stats.held else None
@@ -385,15 +376,15 @@ class Controller:
         held = self._held
         return held is not None and held[2] == damping and _same(q, held[0]) and _same(W, held[1])
 
-    def _damped_trial(self, q, W, R, p, state0: LevelState, dq: np.ndarray) -> tuple[int, tuple]:
+    def _damped_trial(self, q, W, R, p, state0: LevelState, dq: np.ndarray, judged) -> tuple[int, tuple]:
         """``(halvings made, trial)``: the prioritised step ``dq`` (n,) from ``q`` (its full trial in the work
-        buffers), halved up to 3 times while its trial (:meth:`_judge`) is worse (with adaptive damping only); if
-        it stays worse, the met levels' correction alone (:meth:`_correction`)."""
+        buffers, or already ``judged``), halved up to 3 times while its trial (:meth:`_judge`) is worse (with adaptive
+        damping only); if it stays worse, the met levels' correction alone (:meth:`_correction`)."""
         scale = 1.0
         for tries in range(4):
             if tries:
                 self._trial(q, dq, scale, W)
-            trial = self._judge(q, W, state0)
+            trial = judged if tries == 0 and judged is not None else self._judge(q, W, state0)
             if trial[0][0] != WORSE or not self._settings.adaptive_damping:
                 return tries, trial
             if tries == 0 and self._posture is not None:

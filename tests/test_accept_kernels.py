@@ -3,6 +3,7 @@
 import collections
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -107,33 +108,42 @@ def test_is_fresh_only_for_the_very_bits_cached():
     assert not ak.is_fresh(cache, q, W)
 
 
-def _studio_drag(compiled: bool, frames: int, monkeypatch) -> tuple[list, collections.Counter]:
+def _studio_drag(compiled: bool, frames: int, solve: bool, monkeypatch) -> tuple[list, collections.Counter]:
     """The studio's drag (pelvis and left foot pinned, hands at 1 dragged round a circle, the bundled prior, three
-    tracking steps): every frame's result, and how the compiled common step ended (committed / restored first)."""
+    tracking steps), a ``step()`` or a warm ``solve()`` a frame: every frame's result, and how each compiled step
+    ended: ``(committed, restoring steps made)``."""
+    ends, step = collections.Counter(), gsik.control.Controller.step
+
+    def counted(self, *args):
+        stats = step(self, *args)
+        ends[(bool(self._cache.out[ak.R_COMMITTED]), bool(self._cache.out[ak.R_RESTORED]))] += compiled
+        return stats
+
     monkeypatch.setattr(gsik.control.Controller, "compiled_step", compiled)
+    monkeypatch.setattr(gsik.control.Controller, "step", counted)
     solver = gsik.Solver(gsik.load_skeleton("biped"), tracking_steps=3)
     poses = solver.effector_poses()
     use_prior(solver, bundled_prior("biped"))
-    ends, results = collections.Counter(), []
+    results = []
     for frame in range(frames):
         angle = 2.0 * np.pi * frame / 40
         targets = {n: gsik.Target.from_transform(poses[n]) for n in ("pelvis", "left_foot")}
         for hand in ("left_hand", "right_hand"):
             circle = 0.1 * np.array([np.cos(angle) - 1.0, 0.15, np.sin(angle)])
             targets[hand] = gsik.Target(poses[hand][:3, 3] + circle, position_only=True, priority=1)
-        results.append(solver.step(targets))
-        out = solver._make_controller()._cache.out
-        ends[(bool(out[ak.R_COMMITTED]), bool(out[ak.R_RESTORED]))] += 1
+        results.append(solver.solve(targets) if solve else solver.step(targets))
     return results, ends
 
 
-def test_the_compiled_step_is_the_python_branches_bit_for_bit(monkeypatch):
-    """Same angles, errors, status and step norms every frame; the compiled path commits both on the first trial
-    and after restoring steps (and is left to Python otherwise)."""
-    compiled, ends = _studio_drag(True, 60, monkeypatch)
-    reference, _ = _studio_drag(False, 60, monkeypatch)
+@pytest.mark.parametrize("solve", [False, True], ids=["step", "solve"])
+def test_the_compiled_step_is_the_python_branches_bit_for_bit(solve, monkeypatch):
+    """Same angles, errors, status and step norms every frame; the compiled path commits on the first trial and
+    after restoring steps, and leaves a trial no better after them to the Python branches."""
+    compiled, ends = _studio_drag(True, 12 if solve else 60, solve, monkeypatch)
+    reference, _ = _studio_drag(False, 12 if solve else 60, solve, monkeypatch)
     for a, b in zip(compiled, reference):
         assert a.q.tobytes() == b.q.tobytes()
         assert a.position_errors.tobytes() == b.position_errors.tobytes()
         assert (a.status, a.iterations, a.residual, a.step_norm) == (b.status, b.iterations, b.residual, b.step_norm)
-    assert ends[(True, False)] > 0 and ends[(True, True)] > 0
+    assert ends[(True, False)] > 0
+    assert ends[(False, True)] > 0 if solve else ends[(True, True)] > 0

@@ -23,7 +23,8 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik._jit import njit
-from gsik.acceptance import LevelState
+from gsik.acceptance import BETTER, SAME, WORSE, LevelState
+from gsik.control_inputs import ControlStats
 from gsik.kernels import priority
 from gsik.kernels.control import O_CONVERGED, O_LAGGING, O_STATUS, O_TARGET_COST, box, level_state, linearise, \
     step_trial, trial
@@ -31,6 +32,7 @@ from gsik.stall import STALL_PROGRESS, STALL_SHRINK, STALL_WINDOW
 
 #: Verdict codes of :func:`compare_levels`: :data:`gsik.acceptance.BETTER`, ``SAME``, ``WORSE`` in that order.
 V_BETTER, V_SAME, V_WORSE = range(3)
+VERDICTS = (BETTER, SAME, WORSE)
 # Indices of LevelCache.flags: the cache holds a state; that state's convergence, targets' cost, lagging (1.0 / 0.0).
 F_VALID, F_CONVERGED, F_TARGET_COST, F_LAGGING = range(4)
 # Indices of LevelCache.out (control_step's report): the start state was cached; the verdict code and deciding level
@@ -53,6 +55,7 @@ class LevelCache(NamedTuple):
         e: (6m,) the targets' error rows there. flags: (4,) the ``F_*`` figures.
         costs0: (L + 1,), met0: (L + 1,) bool, e0: (6m,): the state of a start pose that is not the cached one.
         moved: (n,) the committed step's change of the angles [rad]. out: (10,) :func:`control_step`'s ``R_*``.
+        dq0: (n,) the first step [rad], kept when restoring steps overwrote the work buffers' (``R_RESTORED``).
     """
 
     q: np.ndarray
@@ -67,6 +70,7 @@ class LevelCache(NamedTuple):
     e0: np.ndarray
     moved: np.ndarray
     out: np.ndarray
+    dq0: np.ndarray
 
 
 def make_cache(n_dofs: int, n_tasks: int, n_levels: int) -> LevelCache:
@@ -74,7 +78,7 @@ def make_cache(n_dofs: int, n_tasks: int, n_levels: int) -> LevelCache:
     k = n_levels + 1
     return LevelCache(np.zeros(n_dofs), np.zeros((4, 4)), np.zeros(k), np.zeros(k, dtype=np.bool_), np.zeros(k),
                       np.zeros(6 * n_tasks), np.zeros(4), np.zeros(k), np.zeros(k, dtype=np.bool_),
-                      np.zeros(6 * n_tasks), np.zeros(n_dofs), np.zeros(10))
+                      np.zeros(6 * n_tasks), np.zeros(n_dofs), np.zeros(10), np.zeros(n_dofs))
 
 
 def cached_state(cache: LevelCache) -> LevelState:
@@ -97,6 +101,19 @@ def store(cache: LevelCache, q: np.ndarray, W: np.ndarray, state: LevelState) ->
     cache.q[:], cache.W[:], cache.costs[:], cache.met[:] = q, W, state.costs, state.met
     cache.anchors[:], cache.e[:] = state.anchors, state.error
     cache.flags[:] = 1.0, float(state.converged), state.target_cost, float(state.lagging)
+
+
+def committed_stats(cache: LevelCache, window, posture_on: bool, stall_tolerance: float) -> ControlStats:
+    """The :class:`~gsik.control_inputs.ControlStats` of a step :func:`control_step` committed: held when its norm
+    is at most ``stall_tolerance`` [rad] or the stall window says it creeps (asked here when the kernel left it to
+    NumPy's norm: ``R_CREEPS`` -1)."""
+    step_norm = math.sqrt(float(cache.moved @ cache.moved))  # NumPy's sum, as a step of the Python branches
+    crept = float(cache.out[R_CREEPS])
+    if crept < 0.0:
+        crept = not step_norm <= stall_tolerance and creeps(window, cache.met, posture_on, cache.costs)
+    flags = cache.flags.tolist()
+    return ControlStats(True, step_norm <= stall_tolerance or crept > 0.0, flags[F_CONVERGED] > 0.0,
+                        flags[F_TARGET_COST], step_norm, flags[F_LAGGING] > 0.0)
 
 
 class StallWindow(NamedTuple):
@@ -261,6 +278,7 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     out[R_RESTORED] = 0.0
     if verdict == V_WORSE and restoring > 0:
         out[R_RESTORED] = 1.0
+        cache.dq0[:] = wk.dq
         verdict, decided = _restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols,
                                     restoring, c0, anchors0, met0, floors, settle, wk)
         if verdict < 0:
