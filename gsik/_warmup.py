@@ -28,7 +28,7 @@ def compile_kernels() -> float:
         solver.move_target(name, T[:3, 3], T[:3, :3])  # gsik.kernels.targets
         solver.solve(targets)
         solver.set_root("left_foot")
-    solver = gsik.Solver(biped)  # the prioritised path (gsik.kernels.control, .priority): two levels and a posture
+    solver = gsik.Solver(biped)  # the prioritised path (kernels.accept, .control, .priority): two levels, a posture
     solver.set_posture()
     poses = solver.effector_poses()
     solver.step({n: gsik.Target.from_transform(T, priority=k % 2) for k, (n, T) in enumerate(poses.items())})

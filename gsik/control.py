@@ -22,10 +22,8 @@ at the largest damping, or ends a run of steps that only creep
 and holding is remembered, so a held target settles at its best reach instead
 of jittering, and a held step costs nothing.
 
-The levels' states, their linearisation and packing, the step and its trial run compiled
-(:mod:`gsik.kernels.control`); this module keeps the acceptance rule, the damping and the rarer branches.
-What a controller is given (:class:`FrameTask`, :class:`Posture`, :class:`Balance`) lives in
-:mod:`gsik.control_inputs`.
+The common step (no balance, the full step's trial better at once) is one compiled call (:mod:`gsik.kernels.accept`
+over :mod:`gsik.kernels.control`); this module keeps the rarer branches. Its inputs live in :mod:`gsik.control_inputs`.
 """
 
 from __future__ import annotations
@@ -40,13 +38,13 @@ from gsik.control_inputs import GROUND_TOLERANCE, Balance, ControlStats, FrameTa
     structure, support  # noqa: F401  (gsik.control's names, as before the split)
 from gsik.control_inputs import _ordered, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
 from gsik.kernels import compiled_entry
+from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
 from gsik.kernels import kinematics as kernels
 from gsik.kernels import priority as priority_kernel
 from gsik.kinematics import kinematic_model, topology
 from gsik.priority import BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE, posture_factor
 from gsik.rotations import transform
-from gsik.stall import StallDetector, unmet_levels
 
 #: A target lags while it is off by more than this many times its tolerance (1 mm, 0.01 rad at the defaults): with
 #: ``settings.tracking_steps`` above 1 a ``Solver.step()`` then linearises again. Measured on bench_drag's studio
@@ -93,6 +91,9 @@ class Controller:
         settings: The :class:`gsik.SolverSettings`.
     """
 
+    #: False: every step through the Python branches (the reference the compiled common path is tested against).
+    compiled_step = True
+
     def __init__(self, skeleton, tasks, posture: Posture | None, balance: Balance | None, settings):
         self._sk = skeleton
         self._settings = settings
@@ -108,7 +109,6 @@ class Controller:
         self._tols = (RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE)
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
-        self._state_cache = None  # (q, world_from_root, LevelState) of the last accepted pose
         self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
         self._rest_damping = self._last_held = False  # start from the base damping; the last step held the pose
         self._layout = None  # (effector names, result names, task index of each) for results
@@ -155,8 +155,9 @@ class Controller:
             row_w = self._row_w  # the same row weights: no array to build (a drag moves targets, not weights)
         else:
             row_w = np.array([row_weights(t, orientation_weight) for t in ts], dtype=float).reshape(-1, 6)
-        self._retarget(np.array([t.position for t in ts]).reshape(-1, 3),
-                       np.array([t.rotation for t in ts]).reshape(-1, 3, 3), row_w)
+        self._retarget(  # a Target's position and rotation are float64: their bytes joined, the (m, 3), (m, 3, 3)
+            np.frombuffer(b"".join([t.position.tobytes() for t in ts])).reshape(-1, 3),
+            np.frombuffer(b"".join([t.rotation.tobytes() for t in ts])).reshape(-1, 3, 3), row_w)
         self._target_weights, self._orientation_weight = weights, orientation_weight
 
     def _retarget(self, tp: np.ndarray, tR: np.ndarray, row_w: np.ndarray) -> None:
@@ -168,8 +169,8 @@ class Controller:
         if not same_w:
             self._row_w = row_w
             self._thresholds()
-        self._state_cache = self._held = None
-        self._stall.reset()
+        self._cache.flags[ak.F_VALID], self._held = 0.0, None
+        self._window.ring[:] = 0
         self._rest_damping = self._last_held  # a held pose's damping was learnt on the old targets: start afresh
 
     def _thresholds(self) -> None:
@@ -206,7 +207,8 @@ class Controller:
             floors[self._balance_level] = 0.5 * (TIGHTEN_FRACTION * BALANCE_TOLERANCE) ** 2
         self._floors = floors
         self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
-        self._stall = StallDetector(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
+        self._window = ak.make_window(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
+        self._cache = ak.make_cache(self._sk.n_dofs, len(self._tasks), L)  # the last accepted pose's levels
 
     def _call(self, kernel, *args):
         """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""
@@ -215,7 +217,6 @@ class Controller:
             entry = self._entries[kernel] = compiled_entry(kernel, *args)
         return entry(*args)
 
-    # -- evaluation ----------------------------------------------------------
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Position [m] and orientation [rad] error (m,) of each task (0 where a row is unused)."""
         self._task_errors(R, p)
@@ -314,40 +315,60 @@ class Controller:
     def step(self, q: np.ndarray, W: np.ndarray, R: np.ndarray, p: np.ndarray, lam: np.ndarray) -> ControlStats:
         """One prioritised step from ``q`` (n_dofs,) [rad], in place on ``q``, ``R``, ``p`` and ``lam`` (1,).
 
-        ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4).
-        """
+        ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4). Without balance, the start
+        state, the step, its trial and a better trial's commit are one compiled call
+        (:func:`gsik.kernels.accept.control_step`)."""
         s = self._settings
         if self._rest_damping:
             lam[0], self._rest_damping = s.damping, False
         damping = float(lam[0]) if s.adaptive_damping else s.damping
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
-        cached = self._state_cache
-        fresh = cached is not None and _same(q, cached[0]) and _same(W, cached[1])
-        state0 = cached[2] if fresh else self._level_state(q, R, p)
-        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, damping)
+        if self._balance is None and s.adaptive_damping and self.compiled_step:
+            self._call(ak.control_step, self._task_model, self._fk_model, self._tasks_in, self._posture_rows,
+                       self._root, W, self._lower, self._upper, s.max_step, q, R, p, lam, damping, s.damping,
+                       self._near, self._tols, self._floors, (float(s.settle_tolerance), DAMPING_FALL, DAMPING_FLOOR),
+                       RESTORING_STEPS if self._posture is not None else 0, float(s.stall_tolerance), self._cache,
+                       self._window, self._work)
+            out = self._cache.out.tolist()
+            if out[ak.R_STATUS] != priority_kernel.OK:
+                raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
+            if out[ak.R_COMMITTED]:
+                return self._stats(q, W, lam, ak.committed_stats(self._cache, self._window, self._posture is not None,
+                                                                 s.stall_tolerance))
+            state0 = ak.cached_state(self._cache) if out[ak.R_FRESH] > 0.0 else ak.start_state(self._cache, out)
+            first, judged = self._work.dq.copy(), None
+            if out[ak.R_RESTORED]:  # the full step's trial and its restoring steps judged no better: only the verdict
+                judged = ((ak.VERDICTS[int(out[ak.R_VERDICT])], 0), None, None, None, None)
+                first = self._cache.dq0.copy()
+        else:
+            fresh = self._call(ak.is_fresh, self._cache, q, W)
+            state0 = ak.cached_state(self._cache) if fresh else self._level_state(q, R, p)
+            if not fresh:
+                self._window.ring[:] = 0  # the pose changed from outside
+            first, judged = self._first_trial(q, W, R, p, state0, damping), None
+        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first, judged)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
             dq = q2 - q
             step_norm = math.sqrt(float(dq @ dq))
             q[:], R[:], p[:] = q2, R2, p2
             state = anchored(state, state0, decided if verdict == BETTER else 0)
-            self._state_cache = (q.copy(), W.copy(), state)
+            ak.store(self._cache, q, W, state)
         else:
             step_norm, state = 0.0, state0
         self._adapt_damping(lam, damping, verdict, accepted, tries)
-        # Held: nothing would change, or even the largest damping's step is refused (the fast path's stall), or
-        # the steps only creep (gsik.stall).
-        if not fresh:
-            self._stall.reset()  # the pose changed from outside
+        # Held: nothing would change, the largest damping's step is refused, or the steps only creep (gsik.stall).
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
-                                       or (not accepted and damping >= MAX_DAMPING)
-                                       or self._stall.creeps(unmet_levels(state.met, self._posture is not None), state.costs))
-        stats = ControlStats(accepted, held, state.converged, state.target_cost, step_norm, state.lagging)
-        # A held pose is kept until the targets change: the same step again would hold again, and a creep that
-        # was taken stops (a frame asked for anyway changes nothing).
-        self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
-        self._last_held = held
+                                       or (not accepted and damping >= MAX_DAMPING) or self._call(
+                                           ak.creeps, self._window, state.met, self._posture is not None, state.costs))
+        return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
+                                                   state.lagging))
+
+    def _stats(self, q, W, lam, stats: ControlStats) -> ControlStats:
+        """``stats``; a held pose is kept until the targets change (a frame asked for anyway changes nothing)."""
+        self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if stats.held else None
+        self._last_held = stats.held
         return stats
 
     def _holds(self, q, W, damping) -> bool:
@@ -355,16 +376,15 @@ class Controller:
         held = self._held
         return held is not None and held[2] == damping and _same(q, held[0]) and _same(W, held[1])
 
-    def _damped_trial(self, q, W, R, p, state0: LevelState, damping) -> tuple[int, tuple]:
-        """``(halvings made, trial)``: the prioritised step from ``q``, halved up to 3 times while its
-        trial (:meth:`_judge`) is worse (with adaptive damping only); if it stays worse, the met levels'
-        correction alone (:meth:`_correction`)."""
-        dq = self._first_trial(q, W, R, p, state0, damping)
+    def _damped_trial(self, q, W, R, p, state0: LevelState, dq: np.ndarray, judged) -> tuple[int, tuple]:
+        """``(halvings made, trial)``: the prioritised step ``dq`` (n,) from ``q`` (its full trial in the work
+        buffers, or already ``judged``), halved up to 3 times while its trial (:meth:`_judge`) is worse (with adaptive
+        damping only); if it stays worse, the met levels' correction alone (:meth:`_correction`)."""
         scale = 1.0
         for tries in range(4):
             if tries:
                 self._trial(q, dq, scale, W)
-            trial = self._judge(q, W, state0)
+            trial = judged if tries == 0 and judged is not None else self._judge(q, W, state0)
             if trial[0][0] != WORSE or not self._settings.adaptive_damping:
                 return tries, trial
             if tries == 0 and self._posture is not None:
@@ -375,8 +395,7 @@ class Controller:
         return tries, self._correction(q, W, R, p, state0) or trial
 
     def _first_trial(self, q, W, R, p, state0: LevelState, damping: float) -> np.ndarray:
-        """The full step (n,) from ``q`` and its trial left in the work buffers (:func:`gsik.kernels.control.step_trial`:
-        one compiled call without balance)."""
+        """The full step (n,) from ``q``, its trial left in the work buffers (one compiled call without balance)."""
         wk, s = self._work, self._settings
         if self._balance is None:
             self._call(ck.step_trial, self._task_model, self._fk_model, self._tasks_in, self._posture_rows,

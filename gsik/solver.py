@@ -82,6 +82,7 @@ class Solver(TargetSetting, AttemptPolicy):
         self._balance = False
         self._controller: control.Controller | None = None  # None: to be made (or retargeted) before use
         self._last_controller: control.Controller | None = None
+        self._controller_for: tuple = (None,) * 4  # (root, packed layout, posture, settings) it was last made for
         self._set_topology(skeleton.root, q, self._settings.damping)
 
     # -- construction helpers -------------------------------------------------
@@ -410,15 +411,20 @@ class Solver(TargetSetting, AttemptPolicy):
         """The controller for the current targets: the last one retargeted if only their values changed."""
         if self._controller is None:
             sk, ow = self._skeleton, self._settings.orientation_weight
-            balance = control.support(sk, self._targets, self._ws.p) if self._balance else None
-            last = self._last_controller
-            key = control.structure_of(sk.root, {n: t.priority for n, t in self._targets.items()}, self._posture,
-                                       balance, self._settings)
-            if last is not None and last.key == key:
-                last.retarget_targets(self._targets, ow)
+            last, made_for = self._last_controller, (sk.root, self._layout, self._posture, self._settings)
+            if not self._balance and last is not None and all(a is b for a, b in zip(made_for, self._controller_for)):
+                last.retarget_targets(self._targets, ow)  # the same packed layout (names, priorities), root, posture
             else:
-                last = control.Controller(sk, control.frame_tasks(sk, self._targets, ow), self._posture, balance,
-                                          self._settings)
+                balance = control.support(sk, self._targets, self._ws.p) if self._balance else None
+                key = control.structure_of(sk.root, {n: t.priority for n, t in self._targets.items()},
+                                           self._posture, balance, self._settings)
+                if last is not None and last.key == key:
+                    last.retarget_targets(self._targets, ow)
+                else:
+                    last = control.Controller(sk, control.frame_tasks(sk, self._targets, ow), self._posture,
+                                              balance, self._settings)
+            # Balance's support depends on the feet's heights: its key is made every time.
+            self._controller_for = (None,) * 4 if self._balance else made_for
             self._controller = self._last_controller = last
         return self._controller
 
