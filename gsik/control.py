@@ -37,6 +37,7 @@ from gsik.balance import center_of_mass, com_jacobian, nearest_point_inside, shr
 from gsik.control_inputs import GROUND_TOLERANCE, Balance, ControlStats, FrameTask, Posture, frame_tasks, \
     structure, support  # noqa: F401  (gsik.control's names, as before the split)
 from gsik.control_inputs import _ordered, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
+from gsik.control_targets import ControlTargets, _same
 from gsik.kernels import compiled_entry
 from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
@@ -45,6 +46,8 @@ from gsik.kernels import priority as priority_kernel
 from gsik.kinematics import kinematic_model, topology
 from gsik.priority import BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE, posture_factor
 from gsik.rotations import transform
+
+_new_tuple = tuple.__new__  # a NamedTuple with every field given, without its __new__'s Python call
 
 #: A target lags while it is off by more than this many times its tolerance (1 mm, 0.01 rad at the defaults): with
 #: ``settings.tracking_steps`` above 1 a ``Solver.step()`` then linearises again. Measured on bench_drag's studio
@@ -77,7 +80,7 @@ BALANCE_BAND = 0.005
 BALANCE_TOLERANCE = 0.001
 
 
-class Controller:
+class Controller(ControlTargets):
     """Prioritised IK steps for one skeleton seen from one root.
 
     Every level's state and the linearised, packed levels come from compiled code (:mod:`gsik.kernels.control`):
@@ -111,7 +114,9 @@ class Controller:
         self._root = skeleton.frame_of(skeleton.root)
         self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
         self._rest_damping = self._last_held = False  # start from the base damping; the last step held the pose
-        self._layout = None  # (effector names, result names, task index of each) for results
+        self._layout = None  # what a result reports, for these effectors (ControlTargets._report_layout)
+        self._rows = None  # each task's row in the solver's packed targets (ControlTargets.use_rows), or None
+        self._errors_left = False  # the work's errors are those at the pose the last step left
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
         names = [t.name for t in self._tasks]
@@ -138,40 +143,6 @@ class Controller:
             self._mass_kinematics = kinematic_model(skeleton, topology(skeleton, skeleton.root, bodies))
             self._Jm = np.zeros((6 * len(balance.mass.mass), n))
         self.retarget(tasks)
-
-    def retarget(self, tasks) -> None:
-        """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
-        ordered = _ordered(tasks)
-        self._target_weights = None
-        self._retarget(np.array([t.position for t in ordered]).reshape(-1, 3),
-                       np.array([t.rotation for t in ordered]).reshape(-1, 3, 3),
-                       np.array([t.row_weight for t in ordered]).reshape(-1, 6))
-
-    def retarget_targets(self, targets, orientation_weight: float) -> None:
-        """:meth:`retarget` from ``{name: gsik.Target}`` (the same names and priorities as the tasks built for)."""
-        ts = [targets[n] for n in self.names]
-        weights = [(t.weight, t.uses_orientation) for t in ts]
-        if weights == self._target_weights and orientation_weight == self._orientation_weight:
-            row_w = self._row_w  # the same row weights: no array to build (a drag moves targets, not weights)
-        else:
-            row_w = np.array([row_weights(t, orientation_weight) for t in ts], dtype=float).reshape(-1, 6)
-        self._retarget(  # a Target's position and rotation are float64: their bytes joined, the (m, 3), (m, 3, 3)
-            np.frombuffer(b"".join([t.position.tobytes() for t in ts])).reshape(-1, 3),
-            np.frombuffer(b"".join([t.rotation.tobytes() for t in ts])).reshape(-1, 3, 3), row_w)
-        self._target_weights, self._orientation_weight = weights, orientation_weight
-
-    def _retarget(self, tp: np.ndarray, tR: np.ndarray, row_w: np.ndarray) -> None:
-        """Target positions (m, 3) [m], orientations (m, 3, 3) and row weights (m, 6), in task order."""
-        same_w = _same(row_w, self._row_w)
-        if same_w and _same(tp, self._tp) and _same(tR, self._tR):
-            return  # the same targets again (a held drag): what the last steps learnt still holds
-        self._tp[:], self._tR[:] = tp, tR  # in place: the kernels' inputs hold them
-        if not same_w:
-            self._row_w = row_w
-            self._thresholds()
-        self._cache.flags[ak.F_VALID], self._held = 0.0, None
-        self._window.ring[:] = 0
-        self._rest_damping = self._last_held  # a held pose's damping was learnt on the old targets: start afresh
 
     def _thresholds(self) -> None:
         """What depends on the row weights only: the kernels' :class:`~gsik.kernels.control.ControlTasks` (each
@@ -200,6 +171,7 @@ class Controller:
         self._work = ck.make_work(self._sk.n_frames, self._sk.n_dofs, len(self._tasks), int(starts[-1]), L,
                                   len(counts))
         self._entries = {}  # compiled entry points, made at first use for these inputs
+        self._layout = None  # a result's errors are reported where these row weights use a row
         per_task = 0.5 * TIGHTEN_FRACTION ** 2 * (w[:, 0] * s.position_tolerance ** 2
                                                   + w[:, 3] * s.orientation_tolerance ** 2)
         floors = np.bincount(self._task_level, per_task, minlength=L + 1)
@@ -209,37 +181,23 @@ class Controller:
         self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
         self._window = ak.make_window(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
         self._cache = ak.make_cache(self._sk.n_dofs, len(self._tasks), L)  # the last accepted pose's levels
+        # control_step's arguments around (W, ...) and (q, R, p, lam, damping): made once, not per step.
+        s = self._settings
+        self._step_args = ((self._task_model, self._fk_model, self._tasks_in, self._posture_rows, self._root),
+                           (self._lower, self._upper, s.max_step),
+                           (s.damping, self._near, self._tols, floors,
+                            (float(s.settle_tolerance), DAMPING_FALL, DAMPING_FLOOR),
+                            RESTORING_STEPS if self._posture is not None else 0, float(s.stall_tolerance),
+                            self._cache, self._window, self._work))
 
     def _call(self, kernel, *args):
         """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""
-        entry = self._entries.get(kernel)
-        if entry is None:
-            entry = self._entries[kernel] = compiled_entry(kernel, *args)
-        return entry(*args)
+        return (self._entries.get(kernel) or self._entry(kernel, *args))(*args)
 
-    def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Position [m] and orientation [rad] error (m,) of each task (0 where a row is unused)."""
-        self._task_errors(R, p)
-        err = self._err.copy()
-        err[0, self._row_w[:, 0] <= 0.0] = 0.0
-        err[1, self._row_w[:, 3] <= 0.0] = 0.0
-        return err[0], err[1]
-
-    def report(self, effector_names: tuple[str, ...], R, p) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
-        """``(names, position errors [m], orientation errors [rad])``: every effector (0 without a target),
-        then the other targeted frames."""
-        if self._layout is None or self._layout[0] != effector_names:
-            names = effector_names + tuple(n for n in self.names if n not in effector_names)
-            where = {n: k for k, n in enumerate(self.names)}
-            self._layout = (effector_names, names, np.array([where.get(n, -1) for n in names], dtype=np.int64))
-        _, names, index = self._layout
-        out = np.empty((2, len(names)))
-        self._call(ck.report_errors, R, p, self._tasks_in, index, self._e, self._err, self._M, out)
-        return names, out[0], out[1]
-
-    def _task_errors(self, R, p) -> None:
-        self._call(kernels.effector_errors, R, p, self._tasks_in.frame, self._tp, self._tR, self._tasks_in.row_weight,
-                   self._e, self._err, self._M)
+    def _entry(self, kernel, *args):
+        """``kernel``'s compiled entry point for the types of ``args``, made and kept."""
+        entry = self._entries[kernel] = compiled_entry(kernel, *args)
+        return entry
 
     def _level_state(self, q, R, p) -> LevelState:
         """The levels at ``q`` (frames ``R``, ``p``), anchored at their own costs (:class:`~gsik.acceptance.LevelState`).
@@ -322,20 +280,20 @@ class Controller:
         if self._rest_damping:
             lam[0], self._rest_damping = s.damping, False
         damping = float(lam[0]) if s.adaptive_damping else s.damping
+        self._errors_left = False
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
         if self._balance is None and s.adaptive_damping and self.compiled_step:
-            self._call(ak.control_step, self._task_model, self._fk_model, self._tasks_in, self._posture_rows,
-                       self._root, W, self._lower, self._upper, s.max_step, q, R, p, lam, damping, s.damping,
-                       self._near, self._tols, self._floors, (float(s.settle_tolerance), DAMPING_FALL, DAMPING_FLOOR),
-                       RESTORING_STEPS if self._posture is not None else 0, float(s.stall_tolerance), self._cache,
-                       self._window, self._work)
+            head, mid, tail = self._step_args
+            entry = self._entries.get(ak.control_step) or self._entry(ak.control_step, *head, W, *mid, q, R, p, lam,
+                                                                         damping, *tail)
+            entry(*head, W, *mid, q, R, p, lam, damping, *tail)
             out = self._cache.out.tolist()
             if out[ak.R_STATUS] != priority_kernel.OK:
                 raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
             if out[ak.R_COMMITTED]:
-                return self._stats(q, W, lam, ak.committed_stats(self._cache, self._window, self._posture is not None,
-                                                                 s.stall_tolerance))
+                self._errors_left = True  # the trial's, at the pose committed
+                return self._stats(q, W, lam, self._committed(out))
             state0 = ak.cached_state(self._cache) if out[ak.R_FRESH] > 0.0 else ak.start_state(self._cache, out)
             first, judged = self._work.dq.copy(), None
             if out[ak.R_RESTORED]:  # the full step's trial and its restoring steps judged no better: only the verdict
@@ -364,6 +322,21 @@ class Controller:
                                            ak.creeps, self._window, state.met, self._posture is not None, state.costs))
         return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
                                                    state.lagging))
+
+    def _committed(self, out: list) -> ControlStats:
+        """The :class:`ControlStats` of a step :func:`~gsik.kernels.accept.control_step` committed (``out``: its
+        ``R_*`` figures), as :func:`~gsik.kernels.accept.committed_stats` makes them: held when the step's norm
+        (NumPy's sum, as a step of the Python branches) is at most the stall tolerance or the stall window says it
+        creeps (asked here when the kernel left it to that norm)."""
+        cache, tolerance = self._cache, self._settings.stall_tolerance
+        step_norm = math.sqrt(cache.moved.dot(cache.moved))  # ndarray.dot: the same BLAS sum as @, for less
+        crept = out[ak.R_CREEPS]
+        if crept < 0.0:
+            crept = not step_norm <= tolerance and self._call(ak.creeps, self._window, cache.met,
+                                                              self._posture is not None, cache.costs)
+        _, converged, target_cost, lagging = cache.flags.tolist()
+        return _new_tuple(ControlStats, (True, step_norm <= tolerance or crept > 0.0, converged > 0.0, target_cost,
+                                         step_norm, lagging > 0.0))
 
     def _stats(self, q, W, lam, stats: ControlStats) -> ControlStats:
         """``stats``; a held pose is kept until the targets change (a frame asked for anyway changes nothing)."""
@@ -472,19 +445,3 @@ class Controller:
             if restored[0] != WORSE:
                 return restored, q3, R3, p3, state3
         return (verdict,) + first
-
-    def target_cost(self, R, p) -> float:
-        """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
-        self._task_errors(R, p)
-        return float(0.5 * (self._row_w * self._e.reshape(-1, 6) ** 2).sum())
-
-    def converged(self, R, p) -> bool:
-        """True if every target is within the position and orientation tolerances."""
-        pos, ori = self.errors(R, p)
-        s = self._settings
-        return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
-
-
-def _same(a: np.ndarray, b: np.ndarray | None) -> bool:
-    """True if ``b`` holds the very values of ``a`` (bit for bit: a cheaper test than ``np.array_equal``)."""
-    return a is b or (b is not None and a.shape == b.shape and a.tobytes() == b.tobytes())

@@ -407,13 +407,18 @@ class Solver(TargetSetting, AttemptPolicy):
         levels = {t.priority for t in self._targets.values()}
         return len(levels) > 1 or any(n not in self._topo.effector_names for n in self._targets)
 
-    def _make_controller(self) -> control.Controller:
-        """The controller for the current targets: the last one retargeted if only their values changed."""
+    def _make_controller(self, rows: bool = False) -> control.Controller:
+        """The controller for the current targets: the last one retargeted if only their values changed.
+        ``rows``: the packed rows hold the targets' values (a frame's step; a solve's continuation stages others
+        there), so a drag's moved targets are gathered from them (:meth:`gsik.control.Controller.retarget_rows`)."""
         if self._controller is None:
             sk, ow = self._skeleton, self._settings.orientation_weight
-            last, made_for = self._last_controller, (sk.root, self._layout, self._posture, self._settings)
-            if not self._balance and last is not None and all(a is b for a, b in zip(made_for, self._controller_for)):
-                last.retarget_targets(self._targets, ow)  # the same packed layout (names, priorities), root, posture
+            last, made_for = self._last_controller, self._controller_for
+            if not self._balance and last is not None and made_for[1] is self._layout and made_for[0] is sk.root \
+                    and made_for[2] is self._posture and made_for[3] is self._settings:
+                # The same packed layout (names, weights, priorities), root, posture and settings.
+                if not (rows and last.retarget_rows(self._packed)):
+                    last.retarget_targets(self._targets, ow)
             else:
                 balance = control.support(sk, self._targets, self._ws.p) if self._balance else None
                 key = control.structure_of(sk.root, {n: t.priority for n, t in self._targets.items()},
@@ -423,8 +428,10 @@ class Solver(TargetSetting, AttemptPolicy):
                 else:
                     last = control.Controller(sk, control.frame_tasks(sk, self._targets, ow), self._posture,
                                               balance, self._settings)
-            # Balance's support depends on the feet's heights: its key is made every time.
-            self._controller_for = (None,) * 4 if self._balance else made_for
+                last.use_rows(self._row_of)
+                # Balance's support depends on the feet's heights: its key is made every time.
+                self._controller_for = (None,) * 4 if self._balance else (sk.root, self._layout, self._posture,
+                                                                           self._settings)
             self._controller = self._last_controller = last
         return self._controller
 
@@ -432,20 +439,27 @@ class Solver(TargetSetting, AttemptPolicy):
         """Up to ``settings.tracking_steps`` prioritised steps (linearisations): another while the last was taken
         and left a target lagging (:data:`gsik.control.TRACKING_ERROR`), so a dragged target is met in its frame
         as the single level's step meets it. ``step_norm``: the whole change of the angles [rad]."""
-        c = self._make_controller()
+        c = self._make_controller(rows=True)
         for iterations in range(1, self._settings.tracking_steps + 1):
             st = c.step(self._q, self._W, self._ws.R, self._ws.p, self._ws.lam)
             if not st.lagging or st.held or not st.accepted:
                 break
         status = Status.CONVERGED if st.converged else Status.STALLED if st.held else Status.BUDGET_EXHAUSTED
-        moved = self._q - self._q_before
-        return self._control_result(status, iterations, st.cost, math.sqrt(float(moved @ moved)), 1)
+        if iterations == 1:  # the one step's own norm: the same difference and sum (0 when it did not move)
+            step_norm = st.step_norm
+        else:
+            moved = self._q - self._q_before
+            step_norm = math.sqrt(moved.dot(moved))
+        return self._control_result(status, iterations, st.cost, step_norm, 1, left=True)
 
     def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
-                        attempts: int) -> SolveResult:
-        """A result naming every effector, then the other targeted frames, with their errors."""
-        names, pos, ori = self._make_controller().report(self._topo.effector_names, self._ws.R, self._ws.p)
-        return SolveResult(self._q.copy(), status, iterations, 0, residual, names, pos, ori, step_norm, attempts)
+                        attempts: int, left: bool = False) -> SolveResult:
+        """A result naming every effector, then the other targeted frames, with their errors. ``left``: the pose
+        is the one the controller's last step left (its errors there are reported as that step found them)."""
+        c = self._controller or self._make_controller()
+        names, pos, ori = c.report(self._topo.effector_names, self._ws.R, self._ws.p, left)
+        return _new_tuple(SolveResult, (self._q.copy(), status, iterations, 0, residual, names, pos, ori, step_norm,
+                                        attempts))
 
 
 def _posture_precision(weights, n: int) -> np.ndarray:

@@ -1,0 +1,67 @@
+"""What a prioritised frame gathers rather than builds again: a drag's moved targets, and the errors a step left.
+
+:class:`gsik.control.Controller` keeps its targets in its own task order (by priority, then name). While a drag only
+moves them, :func:`gather_targets` copies the solver's packed rows (:class:`gsik.kernels.TargetArrays`, one row per
+effector) into that order in one call, instead of reading every :class:`gsik.Target` in Python. A step committed by
+the compiled path has just evaluated every task's errors at the pose it leaves; :func:`gather_errors` reports those
+(:func:`gsik.kernels.control.report_errors`'s output, bit for bit) instead of evaluating them again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gsik._jit import njit
+from gsik.kernels.accept import F_VALID
+
+#: What :func:`gather_targets` returns: the targets already held (nothing written), moved (written), or the packed
+#: rows' weights are not the controller's (nothing written: the caller retargets from the targets themselves).
+SAME, MOVED, REWEIGHTED = 0, 1, 2
+
+
+@njit(cache=True)
+def gather_targets(position, rotation, row_weight, index, tp, tR, row_w, flags, ring):
+    """Row ``index[k]`` of the packed targets (``position`` (e, 3) [m], ``rotation`` (e, 3, 3), ``row_weight`` (e, 6))
+    into task ``k`` of ``tp`` (m, 3), ``tR`` (m, 3, 3), if every packed row's weights are ``row_w`` (m, 6) bit for bit.
+    Every array C-contiguous float64 (``index`` int64): values compare as bits (``-0.0`` is not ``0.0``, a NaN is
+    itself), as ``tobytes`` does.
+
+    When a value changed, the controller's cached level state is dropped (``flags``: its
+    :class:`~gsik.kernels.accept.LevelCache` flags) and its stall window emptied (``ring`` (2,) zeroed), as a
+    retarget does. Returns :data:`SAME`, :data:`MOVED`, or :data:`REWEIGHTED` (nothing written)."""
+    wb, wc = row_weight.view(np.int64), row_w.view(np.int64)
+    m = index.shape[0]
+    for k in range(m):
+        r = index[k]
+        for j in range(6):
+            if wb[r, j] != wc[k, j]:
+                return REWEIGHTED
+    pb, pc = position.view(np.int64), tp.view(np.int64)
+    rb, rc = rotation.view(np.int64), tR.view(np.int64)
+    moved = False
+    for k in range(m):
+        r = index[k]
+        for i in range(3):
+            if pb[r, i] != pc[k, i]:
+                moved = True
+                pc[k, i] = pb[r, i]
+            for j in range(3):
+                if rb[r, i, j] != rc[k, i, j]:
+                    moved = True
+                    rc[k, i, j] = rb[r, i, j]
+    if not moved:
+        return SAME
+    flags[F_VALID] = 0.0
+    ring[0] = 0
+    ring[1] = 0
+    return MOVED
+
+
+@njit(cache=True)
+def gather_errors(err, index, out):
+    """``out`` (2, k) from the tasks' errors ``err`` (2, m) (position [m], orientation [rad]): ``out[a, j] =
+    err[a, index[a, j]]``, 0 where ``index[a, j]`` is -1 (no target, or a row the task does not use)."""
+    for a in range(2):
+        for j in range(index.shape[1]):
+            k = index[a, j]
+            out[a, j] = err[a, k] if k >= 0 else 0.0
