@@ -200,7 +200,8 @@ class Controller(ControlTargets):
         return entry
 
     def _level_state(self, q, R, p) -> LevelState:
-        """The levels at ``q`` (frames ``R``, ``p``), anchored at their own costs (:class:`~gsik.acceptance.LevelState`).
+        """The levels at ``q`` (frames ``R``, ``p``), anchored at their own costs
+        (:class:`~gsik.acceptance.LevelState`).
 
         A target level is met when all its targets are within half the
         tolerances, balance when the centre of mass is inside the support

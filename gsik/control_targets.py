@@ -4,7 +4,7 @@ A mixin of :class:`~gsik.control.Controller`, which owns the state it works on. 
 :class:`~gsik.control_inputs.FrameTask` (:meth:`~ControlTargets.retarget`), as ``{name: gsik.Target}``
 (:meth:`~ControlTargets.retarget_targets`) or, on a drag's every frame, gathered from the solver's packed rows in one
 compiled call (:meth:`~ControlTargets.retarget_rows`, :func:`gsik.kernels.gather.gather_targets`). A result's errors
-are those the last step left when it committed the pose they are for (:func:`gsik.kernels.gather.gather_errors`),
+are those the last step left when it committed the pose they are for (:func:`gsik.kernels.gather.gather_result`),
 else evaluated (:func:`gsik.kernels.control.report_errors`).
 """
 
@@ -60,8 +60,8 @@ class ControlTargets:
                           self._tp, self._tR, self._row_w, self._cache.flags, self._window.ring)
         if code == gather.REWEIGHTED:
             return False
-        if code == gather.MOVED:  # the kernel dropped the cached levels and the stall window
-            self._moved()
+        if code == gather.MOVED:  # the kernel dropped the cached levels and the stall window; the rest of _moved
+            self._held, self._errors_left, self._rest_damping = None, False, self._last_held
         return True
 
     def _retarget(self, tp: np.ndarray, tR: np.ndarray, row_w: np.ndarray) -> None:
@@ -91,20 +91,24 @@ class ControlTargets:
         err[1, self._row_w[:, 3] <= 0.0] = 0.0
         return err[0], err[1]
 
-    def report(self, effector_names: tuple[str, ...], R, p, left: bool = False) \
-            -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
-        """``(names, position errors [m], orientation errors [rad])`` at frames ``R``, ``p``: every effector (0
-        without a target), then the other targeted frames. ``left``: ``R``, ``p`` are the pose the last step left
-        (the caller knows nothing moved it since), so errors that step evaluated there are reported as they are."""
+    def report(self, effector_names: tuple[str, ...], q, R, p, left: bool = False) \
+            -> tuple[tuple[str, ...], np.ndarray]:
+        """``(names, values)``: every effector (0 without a target), then the other targeted frames, and one new
+        array (n + 2k,) of the angles ``q`` (n,) [rad] and the k names' position [m] and orientation [rad] errors at
+        frames ``R``, ``p``. ``left``: this is the pose the last step left (the caller knows nothing moved it since),
+        so the errors that step evaluated there are reported as they are."""
         if self._layout is None or self._layout[0] != effector_names:
             self._layout = self._report_layout(effector_names)
         _, names, index, used = self._layout
-        out = np.empty((2, len(names)))
+        n = len(q)
+        values = np.empty(n + 2 * len(names))
         if left and self._errors_left:
-            self._call(gather.gather_errors, self._work.err, used, out)
+            self._call(gather.gather_result, q, self._work.err, used, values)
         else:
-            self._call(ck.report_errors, R, p, self._tasks_in, index, self._e, self._err, self._M, out)
-        return names, out[0], out[1]
+            values[:n] = q
+            self._call(ck.report_errors, R, p, self._tasks_in, index, self._e, self._err, self._M,
+                       values[n:].reshape(2, -1))
+        return names, values
 
     def _report_layout(self, effector_names: tuple[str, ...]) -> tuple:
         """``(effector_names, result names, task of each (k,) or -1, task of each error (2, k) or -1 where the

@@ -457,9 +457,10 @@ class Solver(TargetSetting, AttemptPolicy):
         """A result naming every effector, then the other targeted frames, with their errors. ``left``: the pose
         is the one the controller's last step left (its errors there are reported as that step found them)."""
         c = self._controller or self._make_controller()
-        names, pos, ori = c.report(self._topo.effector_names, self._ws.R, self._ws.p, left)
-        return _new_tuple(SolveResult, (self._q.copy(), status, iterations, 0, residual, names, pos, ori, step_norm,
-                                        attempts))
+        names, values = c.report(self._topo.effector_names, self._q, self._ws.R, self._ws.p, left)
+        n, k = len(self._q), len(names)  # q and the errors share one buffer: three views the caller owns
+        return _new_tuple(SolveResult, (values[:n], status, iterations, 0, residual, names, values[n:n + k],
+                                        values[n + k:], step_norm, attempts))
 
 
 def _posture_precision(weights, n: int) -> np.ndarray:

@@ -15,3 +15,14 @@ def random_q(skeleton: gsik.Skeleton, rng: np.random.Generator) -> np.ndarray:
 def targets_at(skeleton: gsik.Skeleton, q: np.ndarray, world_from_root: np.ndarray) -> dict[str, gsik.Target]:
     """Full 6-DOF targets on every effector, where the effectors are at ``q``."""
     return {n: gsik.Target.from_transform(T) for n, T in skeleton.effector_poses(q, world_from_root).items()}
+
+
+def studio_drag_targets(poses: dict[str, np.ndarray], frame: int, right_weight: float = 1.0) -> dict[str, gsik.Target]:
+    """Frame ``frame`` of the studio's drag: pelvis and left foot pinned where ``poses`` (4, 4) put them, both hands
+    at priority 1, position only, round a 0.1 m circle of 40 frames (the right hand's weight ``right_weight``)."""
+    angle = 2.0 * np.pi * frame / 40
+    targets = {n: gsik.Target.from_transform(poses[n]) for n in ("pelvis", "left_foot")}
+    circle = 0.1 * np.array([np.cos(angle) - 1.0, 0.15, np.sin(angle)])
+    for hand, weight in (("left_hand", 1.0), ("right_hand", right_weight)):
+        targets[hand] = gsik.Target(poses[hand][:3, 3] + circle, position_only=True, priority=1, weight=weight)
+    return targets

@@ -14,6 +14,8 @@ from gsik.kernels import accept as ak
 from gsik.prior import bundled_prior, use_prior
 from gsik.stall import STALL_WINDOW, StallDetector, unmet_levels
 
+from solver_helpers import studio_drag_targets
+
 CODES = {ak.V_BETTER: BETTER, ak.V_SAME: SAME, ak.V_WORSE: WORSE}
 # Costs drawn from a few values so that ties, equal anchors and tiny changes all occur.
 COST = st.sampled_from([0.0, 1e-9, 1e-6, 1.0001e-6, 0.99e-6, 1e-3, 2e-3, 1.0, float("nan")])
@@ -126,11 +128,7 @@ def _studio_drag(compiled: bool, frames: int, solve: bool, monkeypatch) -> tuple
     use_prior(solver, bundled_prior("biped"))
     results = []
     for frame in range(frames):
-        angle = 2.0 * np.pi * frame / 40
-        targets = {n: gsik.Target.from_transform(poses[n]) for n in ("pelvis", "left_foot")}
-        for hand in ("left_hand", "right_hand"):
-            circle = 0.1 * np.array([np.cos(angle) - 1.0, 0.15, np.sin(angle)])
-            targets[hand] = gsik.Target(poses[hand][:3, 3] + circle, position_only=True, priority=1)
+        targets = studio_drag_targets(poses, frame)
         results.append(solver.solve(targets) if solve else solver.step(targets))
     return results, ends
 

@@ -3,7 +3,7 @@
 :class:`gsik.control.Controller` keeps its targets in its own task order (by priority, then name). While a drag only
 moves them, :func:`gather_targets` copies the solver's packed rows (:class:`gsik.kernels.TargetArrays`, one row per
 effector) into that order in one call, instead of reading every :class:`gsik.Target` in Python. A step committed by
-the compiled path has just evaluated every task's errors at the pose it leaves; :func:`gather_errors` reports those
+the compiled path has just evaluated every task's errors at the pose it leaves; :func:`gather_result` reports those
 (:func:`gsik.kernels.control.report_errors`'s output, bit for bit) instead of evaluating them again.
 """
 
@@ -58,10 +58,14 @@ def gather_targets(position, rotation, row_weight, index, tp, tR, row_w, flags, 
 
 
 @njit(cache=True)
-def gather_errors(err, index, out):
-    """``out`` (2, k) from the tasks' errors ``err`` (2, m) (position [m], orientation [rad]): ``out[a, j] =
-    err[a, index[a, j]]``, 0 where ``index[a, j]`` is -1 (no target, or a row the task does not use)."""
+def gather_result(q, err, index, out):
+    """A result's angles and errors into ``out`` (n + 2k,): ``q`` (n,) [rad], then the position [m] and the
+    orientation [rad] errors of ``k`` frames from the tasks' errors ``err`` (2, m): ``err[a, index[a, j]]``, 0
+    where ``index[a, j]`` is -1 (no target, or a row the task does not use)."""
+    n, k = q.shape[0], index.shape[1]
+    for d in range(n):
+        out[d] = q[d]
     for a in range(2):
-        for j in range(index.shape[1]):
-            k = index[a, j]
-            out[a, j] = err[a, k] if k >= 0 else 0.0
+        for j in range(k):
+            i = index[a, j]
+            out[n + a * k + j] = err[a, i] if i >= 0 else 0.0

@@ -1,0 +1,206 @@
+"""A controlled frame's gathers (gsik.kernels.gather): a drag's moved targets taken from the solver's packed rows,
+and a committed step's errors reported as that step found them, are what the paths they replace give, bit for bit,
+and are not used once the pose or the targets changed."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import gsik
+import gsik.control
+from gsik.control_targets import ControlTargets
+from gsik.kernels import accept as ak
+from gsik.kernels import gather
+from gsik.prior import bundled_prior, use_prior
+
+from solver_helpers import studio_drag_targets
+
+# Values drawn so that equal, -0.0 against 0.0, NaN and tiny differences all occur.
+VALUE = st.sampled_from([0.0, -0.0, 1.0, 1.0 + 2.0 ** -52, -0.5, 1e-300, float("nan"), float("inf")])
+
+
+@st.composite
+def _rows(draw):
+    """Packed rows (e of them), a task order over some of them, and the controller's arrays before."""
+    e = draw(st.integers(1, 6))
+    m = draw(st.integers(1, e))
+    index = np.array(draw(st.permutations(range(e)))[:m], dtype=np.int64)
+
+    def array(*shape):
+        return np.array(draw(st.lists(VALUE, min_size=math.prod(shape), max_size=math.prod(shape)))).reshape(shape)
+
+    position, rotation, weight = array(e, 3), array(e, 3, 3), array(e, 6)
+    tp, tR = array(m, 3), array(m, 3, 3)
+    row_w = weight[index].copy()
+    if draw(st.booleans()):  # the controller's weights differ in one bit somewhere
+        k, j = draw(st.integers(0, m - 1)), draw(st.integers(0, 5))
+        row_w[k, j] = -row_w[k, j] if row_w[k, j] == 0.0 else np.nextafter(row_w[k, j], np.inf)
+    if draw(st.booleans()):  # the targets already held
+        tp, tR = position[index].copy(), rotation[index].copy()
+    return position, rotation, weight, index, tp, tR, row_w
+
+
+@settings(max_examples=400, deadline=None)
+@given(_rows())
+def test_gathered_targets_are_the_packed_rows_in_task_order_bit_for_bit(case):
+    position, rotation, weight, index, tp, tR, row_w = case
+    before = tp.tobytes() + tR.tobytes()
+    flags, ring = np.ones(4), np.array([3, 1], dtype=np.int64)
+    code = gather.gather_targets(position, rotation, weight, index, tp, tR, row_w, flags, ring)
+    if weight[index].tobytes() != row_w.tobytes():
+        assert code == gather.REWEIGHTED
+        assert tp.tobytes() + tR.tobytes() == before and flags[ak.F_VALID] == 1.0 and ring.tolist() == [3, 1]
+        return
+    assert tp.tobytes() == position[index].tobytes() and tR.tobytes() == rotation[index].tobytes()
+    moved = before != tp.tobytes() + tR.tobytes()
+    assert code == (gather.MOVED if moved else gather.SAME)
+    assert (flags[ak.F_VALID], ring.tolist()) == ((0.0, [0, 0]) if moved else (1.0, [3, 1]))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 5), st.integers(0, 4), st.data())
+def test_a_gathered_result_is_the_angles_then_the_used_rows_errors(n, k, data):
+    m = data.draw(st.integers(1, 4))
+    q = np.arange(n, dtype=float) - 0.5
+    err = np.array(data.draw(st.lists(VALUE, min_size=2 * m, max_size=2 * m))).reshape(2, m)
+    index = np.array(data.draw(st.lists(st.integers(-1, m - 1), min_size=2 * k, max_size=2 * k)),
+                     dtype=np.int64).reshape(2, k)
+    out = np.full(n + 2 * k, 7.0)
+    gather.gather_result(q, err, index, out)
+    want = np.concatenate([q] + [[err[a, i] if i >= 0 else 0.0 for i in index[a]] for a in range(2)])
+    assert out.tobytes() == np.asarray(want, dtype=float).tobytes()
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-1e3, 1e3), min_size=1, max_size=80))
+def test_ndarray_dot_is_numpys_matmul_bit_for_bit(values):
+    """The committed step's norm is ``math.sqrt(moved.dot(moved))`` where the Python branches take ``dq @ dq``."""
+    a = np.array(values)
+    assert a.dot(a) == a @ a
+
+
+def _drag(monkeypatch, fresh: bool, studio: bool = False, frames: int = 40) -> list:
+    """Every frame's result of a controlled drag (feet and pelvis pinned, hands at 1 round a circle, a posture)
+    with events between frames: a target moved in place, the same targets again, the pose set from outside, a
+    weight changed. ``fresh``: the paths the gathers replace (targets from the ``Target`` objects, errors
+    evaluated again)."""
+    if fresh:
+        monkeypatch.setattr(ControlTargets, "retarget_rows", lambda self, packed: False)
+        report = ControlTargets.report
+        monkeypatch.setattr(ControlTargets, "report", lambda self, names, q, R, p, left=False: report(
+            self, names, q, R, p, False))
+    solver = gsik.Solver(gsik.load_skeleton("biped"), tracking_steps=3 if studio else 1)
+    poses = solver.effector_poses()
+    if studio:
+        use_prior(solver, bundled_prior("biped"))
+    else:
+        solver.set_posture(solver.q)
+    out = []
+    for frame in range(frames):
+        targets = studio_drag_targets(poses, frame, 0.5 if frame % 9 == 4 else 1.0)
+        if frame % 5 == 3:
+            solver.move_target("left_hand", targets["left_hand"].position + 0.01)
+        elif frame % 7 == 6:
+            solver.set_q(solver.q + 1e-3)
+        elif frame % 11 != 10:  # else the same targets again
+            solver.set_targets(targets)
+        out.append(solver.step())
+    return out
+
+
+@pytest.mark.parametrize("studio", [False, True], ids=["pins", "studio"])
+def test_a_drag_with_the_gathers_is_the_drag_without_them_bit_for_bit(studio, monkeypatch):
+    gathered = _drag(monkeypatch, False, studio)
+    with monkeypatch.context() as m:
+        fresh = _drag(m, True, studio)
+    for a, b in zip(gathered, fresh):
+        assert a.q.tobytes() == b.q.tobytes()
+        assert a.position_errors.tobytes() == b.position_errors.tobytes()
+        assert a.orientation_errors.tobytes() == b.orientation_errors.tobytes()
+        assert (a.status, a.iterations, a.residual, a.step_norm, a.effector_names) == \
+            (b.status, b.iterations, b.residual, b.step_norm, b.effector_names)
+
+
+def test_a_steps_norm_is_the_whole_moves_numpy_norm(monkeypatch):
+    """One step a frame reports its own norm, several the norm of their sum: both NumPy's norm of the change."""
+    solver = gsik.Solver(gsik.load_skeleton("biped"), tracking_steps=3)
+    poses = solver.effector_poses()
+    use_prior(solver, bundled_prior("biped"))
+    iterations = set()
+    for frame in range(30):
+        before = solver.q
+        targets = {n: gsik.Target.from_transform(poses[n]) for n in ("pelvis", "left_foot")}
+        targets["left_hand"] = gsik.Target(poses["left_hand"][:3, 3] + [0.0, 0.0, 0.03 * (frame % 4)], priority=1,
+                                           position_only=True)
+        r = solver.step(targets)
+        moved = r.q - before
+        assert r.step_norm == math.sqrt(moved @ moved)
+        iterations.add(r.iterations)
+    assert {1, 2} <= iterations
+
+
+def _pinned() -> tuple:
+    """A solver with pins, hands at 1 and a posture, stepped once; its controller; its targets."""
+    solver = gsik.Solver(gsik.load_skeleton("biped"))
+    poses = solver.effector_poses()
+    solver.set_posture(solver.q)
+    targets = {n: gsik.Target.from_transform(poses[n]) for n in ("pelvis", "left_foot")}
+    targets["left_hand"] = gsik.Target(poses["left_hand"][:3, 3] + [0.0, 0.05, 0.05], position_only=True, priority=1)
+    solver.step(targets)
+    return solver, solver._controller, targets
+
+
+def _report(solver, left: bool) -> bytes:
+    names, values = solver._controller.report(solver.effector_names, solver._q, solver._ws.R, solver._ws.p, left)
+    return values.tobytes()
+
+
+def test_a_committed_steps_errors_are_reported_as_a_fresh_evaluation_finds_them():
+    solver, c, targets = _pinned()
+    assert c._errors_left  # the step was committed by the compiled path
+    assert _report(solver, True) == _report(solver, False)
+
+
+def test_errors_left_are_not_reported_after_the_targets_or_the_pose_changed():
+    solver, c, targets = _pinned()
+    stale = _report(solver, True)
+    solver.move_target("left_hand", targets["left_hand"].position + 0.02)
+    assert solver._make_controller(rows=True) is c and not c._errors_left  # gathered: the last errors are stale
+    assert _report(solver, True) == _report(solver, False) != stale
+    solver.step()
+    assert c._errors_left
+    q = solver.q
+    q[0] += 0.01
+    solver.set_q(q)  # from outside: the solver's result for this pose evaluates the errors again
+    r = solver._control_result(gsik.Status.CONVERGED, 1, 0.0, 0.0, 1)
+    names, values = c.report(solver.effector_names, solver._q, solver._ws.R, solver._ws.p)
+    assert np.concatenate([r.q, r.position_errors, r.orientation_errors]).tobytes() == values.tobytes()
+    assert r.position_errors.tobytes() != np.frombuffer(stale)[len(q):len(q) + len(names)].tobytes()
+
+
+def test_a_held_step_reports_its_errors_afresh():
+    solver, c, targets = _pinned()
+    for _ in range(200):  # until the pose holds: a held step returns without a trial
+        if solver.step().status is gsik.Status.STALLED or c._held is not None:
+            break
+    assert c._held is not None
+    solver.step()
+    assert not c._errors_left
+    assert _report(solver, True) == _report(solver, False)
+
+
+def test_a_target_off_the_effectors_is_retargeted_from_the_targets(monkeypatch):
+    """An elbow target has no packed row: the controller declines to gather and takes the targets themselves."""
+    solver, c, targets = _pinned()
+    elbow = solver.world_positions()[solver.skeleton.frame_of("left_elbow")]
+    targets["left_elbow"] = gsik.Target(elbow, position_only=True, priority=1)
+    solver.step(targets)
+    c = solver._controller
+    assert c._rows is None and not c.retarget_rows(solver._packed)
+    targets["left_elbow"] = gsik.Target(elbow + 0.01, position_only=True, priority=1)
+    solver.set_targets(targets)
+    solver._make_controller(rows=True)
+    assert c._tp[list(c.names).index("left_elbow")].tolist() == (elbow + 0.01).tolist()
