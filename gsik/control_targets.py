@@ -52,13 +52,13 @@ class ControlTargets:
     def retarget_rows(self, packed) -> bool:
         """:meth:`retarget_targets` from a solver's packed targets (:class:`gsik.kernels.TargetArrays`, the rows
         :meth:`use_rows` named, holding the targets' values), in one compiled call. Returns False, with nothing
-        changed, if a task is not an effector or its row's weights are not the controller's (the caller then
-        retargets from the targets themselves)."""
+        changed, if a task is not an effector, or its row is out of the packed range or weighted otherwise than
+        the controller's task (the caller then retargets from the targets themselves)."""
         if self._rows is None:
             return False
         code = self._call(gather.gather_targets, packed.position, packed.rotation, packed.row_weight, self._rows,
                           self._tp, self._tR, self._row_w, self._cache.flags, self._window.ring)
-        if code == gather.REWEIGHTED:
+        if code == gather.DECLINED:
             return False
         if code == gather.MOVED:  # the kernel dropped the cached levels and the stall window; the rest of _moved
             self._held, self._errors_left, self._rest_damping = None, False, self._last_held

@@ -51,13 +51,22 @@ def test_gathered_targets_are_the_packed_rows_in_task_order_bit_for_bit(case):
     flags, ring = np.ones(4), np.array([3, 1], dtype=np.int64)
     code = gather.gather_targets(position, rotation, weight, index, tp, tR, row_w, flags, ring)
     if weight[index].tobytes() != row_w.tobytes():
-        assert code == gather.REWEIGHTED
+        assert code == gather.DECLINED
         assert tp.tobytes() + tR.tobytes() == before and flags[ak.F_VALID] == 1.0 and ring.tolist() == [3, 1]
         return
     assert tp.tobytes() == position[index].tobytes() and tR.tobytes() == rotation[index].tobytes()
     moved = before != tp.tobytes() + tR.tobytes()
     assert code == (gather.MOVED if moved else gather.SAME)
     assert (flags[ak.F_VALID], ring.tolist()) == ((0.0, [0, 0]) if moved else (1.0, [3, 1]))
+
+
+def test_rows_out_of_the_packed_range_are_declined_with_nothing_written():
+    position, rotation, weight = np.ones((2, 3)), np.tile(np.eye(3), (2, 1, 1)), np.ones((2, 6))
+    tp, tR, flags, ring = np.zeros((1, 3)), np.zeros((1, 3, 3)), np.ones(4), np.ones(2, dtype=np.int64)
+    for row in (-1, 2):
+        code = gather.gather_targets(position, rotation, weight, np.array([row]), tp, tR, np.ones((1, 6)), flags,
+                                     ring)
+        assert code == gather.DECLINED and not tp.any() and not tR.any() and flags.all() and ring.all()
 
 
 @settings(max_examples=200, deadline=None)

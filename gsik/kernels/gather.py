@@ -14,9 +14,10 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels.accept import F_VALID
 
-#: What :func:`gather_targets` returns: the targets already held (nothing written), moved (written), or the packed
-#: rows' weights are not the controller's (nothing written: the caller retargets from the targets themselves).
-SAME, MOVED, REWEIGHTED = 0, 1, 2
+#: What :func:`gather_targets` returns: the targets already held (nothing written), moved (written), or declined: a
+#: row out of the packed range or weighted otherwise than the controller's task (nothing written: the caller
+#: retargets from the targets themselves).
+SAME, MOVED, DECLINED = 0, 1, 2
 
 
 @njit(cache=True)
@@ -28,14 +29,17 @@ def gather_targets(position, rotation, row_weight, index, tp, tR, row_w, flags, 
 
     When a value changed, the controller's cached level state is dropped (``flags``: its
     :class:`~gsik.kernels.accept.LevelCache` flags) and its stall window emptied (``ring`` (2,) zeroed), as a
-    retarget does. Returns :data:`SAME`, :data:`MOVED`, or :data:`REWEIGHTED` (nothing written)."""
+    retarget does. Returns :data:`SAME`, :data:`MOVED`, or :data:`DECLINED` (nothing written)."""
     wb, wc = row_weight.view(np.int64), row_w.view(np.int64)
     m = index.shape[0]
     for k in range(m):
         r = index[k]
+        if r < 0 or r >= position.shape[0] or position.shape[0] != rotation.shape[0] \
+                or position.shape[0] != row_weight.shape[0]:
+            return DECLINED
         for j in range(6):
             if wb[r, j] != wc[k, j]:
-                return REWEIGHTED
+                return DECLINED
     pb, pc = position.view(np.int64), tp.view(np.int64)
     rb, rc = rotation.view(np.int64), tR.view(np.int64)
     moved = False
