@@ -43,6 +43,7 @@ from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
 from gsik.kernels import kinematics as kernels
 from gsik.kernels import priority as priority_kernel
+from gsik.kernels import step_inputs
 from gsik.kinematics import kinematic_model, topology
 from gsik.priority import BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE, posture_factor
 from gsik.rotations import transform
@@ -189,6 +190,7 @@ class Controller(ControlTargets):
                             (float(s.settle_tolerance), DAMPING_FALL, DAMPING_FLOOR),
                             RESTORING_STEPS if self._posture is not None else 0, float(s.stall_tolerance),
                             self._cache, self._window, self._work))
+        self._step_call = None  # (compiled entry, StepInputs): made at the first compiled step for these inputs
 
     def _call(self, kernel, *args):
         """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""
@@ -285,10 +287,8 @@ class Controller(ControlTargets):
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
         if self._balance is None and s.adaptive_damping and self.compiled_step:
-            head, mid, tail = self._step_args
-            entry = self._entries.get(ak.control_step) or self._entry(ak.control_step, *head, W, *mid, q, R, p, lam,
-                                                                         damping, *tail)
-            entry(*head, W, *mid, q, R, p, lam, damping, *tail)
+            entry, inputs = self._step_call or self._make_step_call(W, q, R, p, lam, damping)
+            entry(inputs, W, q, R, p, lam, damping)
             out = self._cache.out.tolist()
             if out[ak.R_STATUS] != priority_kernel.OK:
                 raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
@@ -323,6 +323,19 @@ class Controller(ControlTargets):
                                            ak.creeps, self._window, state.met, self._posture is not None, state.costs))
         return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
                                                    state.lagging))
+
+    def _make_step_call(self, W, q, R, p, lam, damping) -> tuple:
+        """``(entry, inputs)``: :func:`gsik.kernels.step_inputs.control_step`'s compiled entry and this controller's
+        :class:`~gsik.kernels.step_inputs.StepInputs` (numba unboxes one object, not ~70 arrays a step), kept; without
+        numba, :func:`gsik.kernels.accept.control_step` given every argument."""
+        head, mid, tail = self._step_args
+        if not step_inputs.AVAILABLE:
+            self._step_call = (lambda _, W, q, R, p, lam, damping: ak.control_step(*head, W, *mid, q, R, p, lam,
+                                                                                   damping, *tail), None)
+            return self._step_call
+        inputs = step_inputs.make_step_inputs(*head, *mid, *tail)
+        self._step_call = (compiled_entry(step_inputs.control_step, inputs, W, q, R, p, lam, damping), inputs)
+        return self._step_call
 
     def _committed(self, out: list) -> ControlStats:
         """The :class:`ControlStats` of a step :func:`~gsik.kernels.accept.control_step` committed (``out``: its

@@ -1,6 +1,7 @@
-"""A controlled frame's gathers (gsik.kernels.gather): a drag's moved targets taken from the solver's packed rows,
-and a committed step's errors reported as that step found them, are what the paths they replace give, bit for bit,
-and are not used once the pose or the targets changed."""
+"""What a controlled frame takes as it is rather than building again: a drag's moved targets gathered from the solver's
+packed rows and a committed step's errors as that step found them (gsik.kernels.gather), the step's fixed inputs in
+one compiled object (gsik.kernels.step_inputs). Each gives what the path it replaces gives, bit for bit, and the
+gathers are not used once the pose or the targets changed."""
 
 import math
 
@@ -13,7 +14,7 @@ import gsik
 import gsik.control
 from gsik.control_targets import ControlTargets
 from gsik.kernels import accept as ak
-from gsik.kernels import gather
+from gsik.kernels import gather, step_inputs
 from gsik.prior import bundled_prior, use_prior
 
 from solver_helpers import studio_drag_targets
@@ -213,3 +214,29 @@ def test_a_target_off_the_effectors_is_retargeted_from_the_targets(monkeypatch):
     solver.set_targets(targets)
     solver._make_controller(rows=True)
     assert c._tp[list(c.names).index("left_elbow")].tolist() == (elbow + 0.01).tolist()
+
+
+@pytest.mark.skipif(not step_inputs.AVAILABLE, reason="StepInputs needs numba's compiled code")
+def test_a_step_through_step_inputs_is_the_kernel_given_every_argument(biped):
+    """The same pose, frames, damping and every buffer of the controller (cache, stall window, work), step after
+    step from random poses, as :func:`gsik.kernels.accept.control_step` called with its 23 arguments."""
+    runs = []
+    for direct in (False, True):
+        rng = np.random.default_rng(4)
+        solver, c, targets = _pinned()
+        head, mid, tail = c._step_args
+        q, W, R, p, lam = solver._q, solver._W, solver._ws.R, solver._ws.p, solver._ws.lam
+        inputs = step_inputs.make_step_inputs(*head, *mid, *tail)
+        state = []
+        for k in range(12):
+            if k % 4 == 0:
+                solver.set_q(np.clip(solver.q + rng.normal(0.0, 0.05, len(q)), biped.lower, biped.upper))
+            if direct:
+                ak.control_step(*head, W, *mid, q, R, p, lam, 1e-3, *tail)
+            else:
+                step_inputs.control_step(inputs, W, q, R, p, lam, 1e-3)
+            buffers = [q, R, p, lam, *c._cache, *c._window, *c._work]
+            state.append(b"".join(np.ascontiguousarray(a).tobytes() for a in buffers))
+        runs.append(state)
+    assert runs[0] == runs[1]
+    assert len(set(runs[0])) > 1  # the steps moved
