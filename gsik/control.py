@@ -23,7 +23,9 @@ and holding is remembered, so a held target settles at its best reach instead
 of jittering, and a held step costs nothing.
 
 The common step (no balance, the full step's trial better at once) is one compiled call (:mod:`gsik.kernels.accept`
-over :mod:`gsik.kernels.control`); this module keeps the rarer branches. Its inputs live in :mod:`gsik.control_inputs`.
+over :mod:`gsik.kernels.control`, its fixed inputs held by one :mod:`gsik.kernels.step_inputs` object); this module
+keeps the rarer branches. Its inputs live in :mod:`gsik.control_inputs`, its retargeting and reports in
+:mod:`gsik.control_targets`.
 """
 
 from __future__ import annotations
@@ -182,24 +184,14 @@ class Controller(ControlTargets):
         self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
         self._window = ak.make_window(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
         self._cache = ak.make_cache(self._sk.n_dofs, len(self._tasks), L)  # the last accepted pose's levels
-        # control_step's arguments around (W, ...) and (q, R, p, lam, damping): made once, not per step.
-        s = self._settings
-        self._step_args = ((self._task_model, self._fk_model, self._tasks_in, self._posture_rows, self._root),
-                           (self._lower, self._upper, s.max_step),
-                           (s.damping, self._near, self._tols, floors,
-                            (float(s.settle_tolerance), DAMPING_FALL, DAMPING_FLOOR),
-                            RESTORING_STEPS if self._posture is not None else 0, float(s.stall_tolerance),
-                            self._cache, self._window, self._work))
         self._step_call = None  # (compiled entry, StepInputs): made at the first compiled step for these inputs
 
     def _call(self, kernel, *args):
         """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""
-        return (self._entries.get(kernel) or self._entry(kernel, *args))(*args)
-
-    def _entry(self, kernel, *args):
-        """``kernel``'s compiled entry point for the types of ``args``, made and kept."""
-        entry = self._entries[kernel] = compiled_entry(kernel, *args)
-        return entry
+        entry = self._entries.get(kernel)
+        if entry is None:
+            entry = self._entries[kernel] = compiled_entry(kernel, *args)
+        return entry(*args)
 
     def _level_state(self, q, R, p) -> LevelState:
         """The levels at ``q`` (frames ``R``, ``p``), anchored at their own costs
@@ -324,11 +316,22 @@ class Controller(ControlTargets):
         return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
                                                    state.lagging))
 
+    def step_arguments(self) -> tuple:
+        """``(head, mid, tail)``: :func:`gsik.kernels.accept.control_step`'s arguments that are fixed for these
+        inputs, as ``control_step(*head, W, *mid, q, R, p, lam, damping, *tail)`` takes them."""
+        s = self._settings
+        return ((self._task_model, self._fk_model, self._tasks_in, self._posture_rows, self._root),
+                (self._lower, self._upper, s.max_step),
+                (s.damping, self._near, self._tols, self._floors, (float(s.settle_tolerance), DAMPING_FALL,
+                                                                   DAMPING_FLOOR),
+                 RESTORING_STEPS if self._posture is not None else 0, float(s.stall_tolerance), self._cache,
+                 self._window, self._work))
+
     def _make_step_call(self, W, q, R, p, lam, damping) -> tuple:
         """``(entry, inputs)``: :func:`gsik.kernels.step_inputs.control_step`'s compiled entry and this controller's
         :class:`~gsik.kernels.step_inputs.StepInputs` (numba unboxes one object, not ~70 arrays a step), kept; without
         numba, :func:`gsik.kernels.accept.control_step` given every argument."""
-        head, mid, tail = self._step_args
+        head, mid, tail = self.step_arguments()
         if not step_inputs.AVAILABLE:
             self._step_call = (lambda _, W, q, R, p, lam, damping: ak.control_step(*head, W, *mid, q, R, p, lam,
                                                                                    damping, *tail), None)

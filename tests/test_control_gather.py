@@ -224,7 +224,7 @@ def test_a_step_through_step_inputs_is_the_kernel_given_every_argument(biped):
     for direct in (False, True):
         rng = np.random.default_rng(4)
         solver, c, targets = _pinned()
-        head, mid, tail = c._step_args
+        head, mid, tail = c.step_arguments()
         q, W, R, p, lam = solver._q, solver._W, solver._ws.R, solver._ws.p, solver._ws.lam
         inputs = step_inputs.make_step_inputs(*head, *mid, *tail)
         state = []
