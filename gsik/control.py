@@ -280,13 +280,13 @@ class Controller(ControlTargets):
             return self._held[3]  # the same step from the same pose: it would hold again
         if self._balance is None and s.adaptive_damping and self.compiled_step:
             entry, inputs = self._step_call or self._make_step_call(W, q, R, p, lam, damping)
-            entry(inputs, W, q, R, p, lam, damping)
-            out = self._cache.out.tolist()
-            if out[ak.R_STATUS] != priority_kernel.OK:
+            end = entry(inputs, W, q, R, p, lam, damping)
+            if end[0] != priority_kernel.OK:
                 raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
-            if out[ak.R_COMMITTED]:
+            if end[1]:
                 self._errors_left = True  # the trial's, at the pose committed
-                return self._stats(q, W, lam, self._committed(out))
+                return self._stats(q, W, lam, self._committed(end))
+            out = self._cache.out.tolist()
             state0 = ak.cached_state(self._cache) if out[ak.R_FRESH] > 0.0 else ak.start_state(self._cache, out)
             first, judged = self._work.dq.copy(), None
             if out[ak.R_RESTORED]:  # the full step's trial and its restoring steps judged no better: only the verdict
@@ -333,25 +333,30 @@ class Controller(ControlTargets):
         numba, :func:`gsik.kernels.accept.control_step` given every argument."""
         head, mid, tail = self.step_arguments()
         if not step_inputs.AVAILABLE:
-            self._step_call = (lambda _, W, q, R, p, lam, damping: ak.control_step(*head, W, *mid, q, R, p, lam,
-                                                                                   damping, *tail), None)
+            self._step_call = (lambda _, W, q, R, p, lam, damping: self._end(ak.control_step(
+                *head, W, *mid, q, R, p, lam, damping, *tail)), None)
             return self._step_call
         inputs = step_inputs.make_step_inputs(*head, *mid, *tail)
         self._step_call = (compiled_entry(step_inputs.control_step, inputs, W, q, R, p, lam, damping), inputs)
         return self._step_call
 
-    def _committed(self, out: list) -> ControlStats:
-        """The :class:`ControlStats` of a step :func:`~gsik.kernels.accept.control_step` committed (``out``: its
-        ``R_*`` figures), as :func:`~gsik.kernels.accept.committed_stats` makes them: held when the step's norm
-        (NumPy's sum, as a step of the Python branches) is at most the stall tolerance or the stall window says it
-        creeps (asked here when the kernel left it to that norm)."""
+    def _end(self, _=None) -> tuple:
+        """What :func:`gsik.kernels.step_inputs.control_step` returns, read from the cache (the call without it)."""
+        out, flags = self._cache.out.tolist(), self._cache.flags.tolist()
+        return (out[ak.R_STATUS], out[ak.R_COMMITTED], out[ak.R_CREEPS], flags[ak.F_CONVERGED],
+                flags[ak.F_TARGET_COST], flags[ak.F_LAGGING])
+
+    def _committed(self, end: tuple) -> ControlStats:
+        """The :class:`ControlStats` of a step :func:`~gsik.kernels.accept.control_step` committed (``end``: what
+        :func:`gsik.kernels.step_inputs.control_step` returns), as :func:`~gsik.kernels.accept.committed_stats` makes
+        them: held when the step's norm (NumPy's sum, as a step of the Python branches) is at most the stall
+        tolerance or the stall window says it creeps (asked here when the kernel left it to that norm)."""
         cache, tolerance = self._cache, self._settings.stall_tolerance
         step_norm = math.sqrt(cache.moved.dot(cache.moved))  # ndarray.dot: the same BLAS sum as @, for less
-        crept = out[ak.R_CREEPS]
+        _, _, crept, converged, target_cost, lagging = end
         if crept < 0.0:
             crept = not step_norm <= tolerance and self._call(ak.creeps, self._window, cache.met,
                                                               self._posture is not None, cache.costs)
-        _, converged, target_cost, lagging = cache.flags.tolist()
         return _new_tuple(ControlStats, (True, step_norm <= tolerance or crept > 0.0, converged > 0.0, target_cost,
                                          step_norm, lagging > 0.0))
 

@@ -240,3 +240,13 @@ def test_a_step_through_step_inputs_is_the_kernel_given_every_argument(biped):
         runs.append(state)
     assert runs[0] == runs[1]
     assert len(set(runs[0])) > 1  # the steps moved
+
+
+def test_without_step_inputs_a_drag_steps_the_same(monkeypatch):
+    """Where numba's compiled code is off the controller calls the kernel with every argument: the same drag."""
+    with_inputs = _drag(monkeypatch, False, frames=12)
+    monkeypatch.setattr(step_inputs, "AVAILABLE", False)
+    without = _drag(monkeypatch, False, frames=12)
+    for a, b in zip(with_inputs, without):
+        assert a.q.tobytes() == b.q.tobytes() and a.position_errors.tobytes() == b.position_errors.tobytes()
+        assert (a.status, a.step_norm) == (b.status, b.step_norm)

@@ -47,8 +47,12 @@ if AVAILABLE:
     def control_step(inputs, W, q, R, p, lam, damping):
         """:func:`gsik.kernels.accept.control_step` from ``q`` (n,) [rad] at ``W`` (4, 4) (frames ``R``, ``p``;
         ``lam`` (1,) the adaptive damping, ``damping`` this step's) with a controller's fixed ``inputs``
-        (:func:`make_step_inputs`)."""
+        (:func:`make_step_inputs`). Returns what a committed step's statistics need, read from the cache's ``out``
+        and ``flags``: ``(R_STATUS, R_COMMITTED, R_CREEPS, F_CONVERGED, F_TARGET_COST, F_LAGGING)``."""
         s = inputs
         ak.control_step(s.task_model, s.fk, s.tasks, s.posture, s.root, W, s.lower, s.upper, s.max_step, q, R, p,
                         lam, damping, s.base, s.near, s.tols, s.floors, s.rule, s.restoring, s.stall_tolerance,
                         s.cache, s.window, s.wk)
+        out, flags = s.cache.out, s.cache.flags
+        return (out[ak.R_STATUS], out[ak.R_COMMITTED], out[ak.R_CREEPS], flags[ak.F_CONVERGED],
+                flags[ak.F_TARGET_COST], flags[ak.F_LAGGING])
