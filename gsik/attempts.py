@@ -13,6 +13,7 @@ from gsik.kernels import O_COST, O_FINITE, O_ITERATIONS, O_STATUS, O_STEP_NORM, 
 from gsik.kernels import solve as solve_kernels
 from gsik.result import _STATUSES, SolveResult, Status
 from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix
+from gsik.stall import PostureSettle
 from gsik.targets import Target
 
 #: Attempts ending with weighted errors this close (relative) found the same best reach ...
@@ -324,13 +325,24 @@ class AttemptPolicy:
         """``(last step's ControlStats or None, steps made)``: at most ``iterations`` prioritised steps."""
         lam = np.array([self._settings.damping])
         settles = self._posture is not None or self._balance  # keep going after convergence until they hold
+        posture = self._posture_settle(c)
         st = None
         it = 0
         for it in range(1, iterations + 1):
             st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
             if st.held or (st.converged and not settles):
                 break
+            if posture is not None and posture.settled(c.first_step(), st.converged):
+                st = st._replace(held=True)
+                break
         return st, it
+
+    def _posture_settle(self, c) -> PostureSettle | None:
+        """The posture's settle test for an attempt's steps (:class:`~gsik.stall.PostureSettle`), or ``None``
+        without a posture, with balance (its level's state is not the targets'), or at ``posture_tolerance`` 0."""
+        if self._posture is None or self._balance or self._settings.posture_tolerance <= 0.0:
+            return None
+        return PostureSettle(self._settings.posture_tolerance, c.converged(self._ws.R, self._ws.p))
 
     def _control_status(self, c, st) -> Status:
         """How a prioritised attempt ended, given its last step ``st`` (None if it made none)."""

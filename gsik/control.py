@@ -111,6 +111,7 @@ class Controller:
         self._root = skeleton.frame_of(skeleton.root)
         self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
         self._rest_damping = self._last_held = False  # start from the base damping; the last step held the pose
+        self._first = np.zeros(skeleton.n_dofs)  # where the last step's full step is (first_step)
         self._layout = None  # (effector names, result names, task index of each) for results
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
@@ -334,6 +335,7 @@ class Controller:
             if out[ak.R_STATUS] != priority_kernel.OK:
                 raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
             if out[ak.R_COMMITTED]:
+                self._first = self._cache.dq0 if out[ak.R_RESTORED] else self._work.dq
                 return self._stats(q, W, lam, ak.committed_stats(self._cache, self._window, self._posture is not None,
                                                                  s.stall_tolerance))
             state0 = ak.cached_state(self._cache) if out[ak.R_FRESH] > 0.0 else ak.start_state(self._cache, out)
@@ -347,6 +349,7 @@ class Controller:
             if not fresh:
                 self._window.ring[:] = 0  # the pose changed from outside
             first, judged = self._first_trial(q, W, R, p, state0, damping), None
+        self._first = first
         tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first, judged)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
@@ -364,6 +367,11 @@ class Controller:
                                            ak.creeps, self._window, state.met, self._posture is not None, state.costs))
         return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
                                                    state.lagging))
+
+    def first_step(self) -> np.ndarray:
+        """(n_dofs,) [rad] the full step the last :meth:`step` computed at its start pose (before halving or restoring
+        steps; zeros before any). A view into the controller's buffers: read it before the next step."""
+        return self._first
 
     def _stats(self, q, W, lam, stats: ControlStats) -> ControlStats:
         """``stats``; a held pose is kept until the targets change (a frame asked for anyway changes nothing)."""

@@ -17,7 +17,8 @@ from gsik.kernels import KernelSettings
 #: :meth:`Solver.solve` alike: fixed delta, PGS sweeps only, no step limit, no adaptive damping, no settling,
 #: no subspace minimisation, all rows from the start.
 PAPER_METHOD = MappingProxyType(dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0,
-                                     settle_tolerance=0.0, positions_first=False, solve_max_step=0.0))
+                                     settle_tolerance=0.0, positions_first=False, solve_max_step=0.0,
+                                     posture_tolerance=0.0))
 
 
 #: Largest value of each whole-number setting: far above any useful value, low enough that every call ends soon
@@ -34,9 +35,9 @@ class SolverSettings:
     """Solver settings; every field is checked when the settings are made.
 
     Every setting reaches both :meth:`Solver.step` and :meth:`Solver.solve`,
-    except ``sweeps`` and ``max_step`` (a step's; a solve's linearisations
-    use ``solve_sweeps`` and ``solve_max_step``) and ``positions_first`` and
-    the last five, which only a solve reads. ``residual_tolerance`` and
+    except ``sweeps``, ``max_step`` and ``tracking_steps`` (a step's; a solve's linearisations
+    use ``solve_sweeps`` and ``solve_max_step``) and ``positions_first``, ``posture_tolerance``
+    and ``max_iterations`` to ``seed``, which only a solve reads. ``residual_tolerance`` and
     ``update_tolerance`` end the PGS sweeps; with ``subspace_minimization``
     each linear system is solved exactly instead, in a step as in a solve.
 
@@ -79,6 +80,11 @@ class SolverSettings:
             posture or balance: another while the last was taken and left a target off by more than
             :data:`gsik.control.TRACKING_ERROR` times its tolerance, so a dragged target keeps up (the studio's
             default is 3). 1: one linearisation a step, as the single level's.
+        posture_tolerance: A :meth:`Solver.solve` attempt with a posture (and no balance) ends once every target
+            is within its tolerances and the posture's predicted remaining change is at most this on every DOF
+            [rad]: the change the next steps would make, from the last two steps' sizes (a contraction's estimate,
+            :class:`gsik.stall.PostureSettle`). 0 disables: the attempt goes on until a step gains less than
+            ``settle_tolerance`` (a refused step, then damped ones: up to a stall). :meth:`Solver.step` ignores it.
         warm_start: Start each frame's sweeps from the previous frame's ``dq``
             (in a solve, each linearisation's from the last step taken).
         orientation_weight: Weight of orientation rows relative to position
@@ -121,6 +127,7 @@ class SolverSettings:
     restarts: int = 20
     seed: int = 0
     tracking_steps: int = 1
+    posture_tolerance: float = 1e-3
 
     def __post_init__(self):
         for f in fields(self):

@@ -70,3 +70,38 @@ def unmet_levels(met: np.ndarray, posture_on: bool) -> list[bool]:
     unmet = [not m for m in np.asarray(met, dtype=bool).tolist()]
     unmet[-1] = bool(posture_on)
     return unmet
+
+
+
+class PostureSettle:
+    """Whether a prioritised solve's posture has settled, in its own terms: the change its next step would make.
+
+    With every target within its tolerances, a prioritised step is the posture's Gauss-Newton step in the targets'
+    tangent null space: its largest change of one DOF [rad] estimates how far the posture's optimum still is. The
+    estimate is short by the factor ``1 / (1 - theta)`` of the linear contraction that the constraints' curvature
+    (the targets' multipliers times their second derivatives, which the step ignores) leaves: measured on
+    bench_drag, consecutive steps shrink about 3x (``theta`` about 1/3). The posture has settled when a step
+    computed with the targets within their tolerances at its start, and ending with them there, changes no DOF by
+    more than the tolerance: the attempt ends there instead of going on until a step gains under
+    ``settle_tolerance`` (then, as a met target's in-band correction costs the posture more than that, refusals
+    while the damping climbs, until :class:`StallDetector` calls a stall).
+
+    Args:
+        tolerance: The largest change of one DOF [rad] of a step that settles the posture (0: never).
+        converged: Every target is within its tolerances at the start pose.
+    """
+
+    def __init__(self, tolerance: float, converged: bool):
+        self._tolerance = tolerance
+        self._converged = converged
+
+    def settled(self, step: np.ndarray, converged: bool) -> bool:
+        """True if this step settles the posture.
+
+        Args:
+            step: (n_dofs,) the full prioritised step computed at the step's start pose [rad], whether it was taken
+                whole, halved or refused.
+            converged: Every target is within its tolerances after the step.
+        """
+        was, self._converged = self._converged, converged
+        return was and converged and float(np.max(np.abs(step), initial=0.0)) <= self._tolerance
