@@ -93,6 +93,8 @@ class Controller:
 
     #: False: every step through the Python branches (the reference the compiled common path is tested against).
     compiled_step = True
+    #: The last step's full step when the Python branches judged it, ``None`` when the compiled call committed it.
+    _first: np.ndarray | None = None
 
     def __init__(self, skeleton, tasks, posture: Posture | None, balance: Balance | None, settings):
         self._sk = skeleton
@@ -111,7 +113,6 @@ class Controller:
         self._root = skeleton.frame_of(skeleton.root)
         self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
         self._rest_damping = self._last_held = False  # start from the base damping; the last step held the pose
-        self._first = np.zeros(skeleton.n_dofs)  # where the last step's full step is (first_step)
         self._layout = None  # (effector names, result names, task index of each) for results
         self._tasks = _ordered(tasks)
         self.key = structure(skeleton, tasks, posture, balance, settings)
@@ -320,6 +321,7 @@ class Controller:
         state, the step, its trial and a better trial's commit are one compiled call
         (:func:`gsik.kernels.accept.control_step`)."""
         s = self._settings
+        self._first = None
         if self._rest_damping:
             lam[0], self._rest_damping = s.damping, False
         damping = float(lam[0]) if s.adaptive_damping else s.damping
@@ -335,7 +337,6 @@ class Controller:
             if out[ak.R_STATUS] != priority_kernel.OK:
                 raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
             if out[ak.R_COMMITTED]:
-                self._first = self._cache.dq0 if out[ak.R_RESTORED] else self._work.dq
                 return self._stats(q, W, lam, ak.committed_stats(self._cache, self._window, self._posture is not None,
                                                                  s.stall_tolerance))
             state0 = ak.cached_state(self._cache) if out[ak.R_FRESH] > 0.0 else ak.start_state(self._cache, out)
@@ -367,11 +368,6 @@ class Controller:
                                            ak.creeps, self._window, state.met, self._posture is not None, state.costs))
         return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
                                                    state.lagging))
-
-    def first_step(self) -> np.ndarray:
-        """(n_dofs,) [rad] the full step the last :meth:`step` computed at its start pose (before halving or restoring
-        steps; zeros before any). A view into the controller's buffers: read it before the next step."""
-        return self._first
 
     def _stats(self, q, W, lam, stats: ControlStats) -> ControlStats:
         """``stats``; a held pose is kept until the targets change (a frame asked for anyway changes nothing)."""
@@ -480,6 +476,13 @@ class Controller:
             if restored[0] != WORSE:
                 return restored, q3, R3, p3, state3
         return (verdict,) + first
+
+    def first_step(self) -> np.ndarray:
+        """(n_dofs,) [rad] the full step the last :meth:`step` that was not held computed at its start pose (before
+        halving or restoring steps). A view into the controller's buffers: read it before the next step."""
+        if self._first is not None:
+            return self._first
+        return self._cache.dq0 if self._cache.out[ak.R_RESTORED] else self._work.dq
 
     def target_cost(self, R, p) -> float:
         """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
