@@ -448,6 +448,11 @@ class Controller:
         trial = self._judge(q, W, state0, upto=k)
         return trial if trial[0][0] == BETTER else None
 
+    def first_step(self) -> np.ndarray:
+        """(n_dofs,) [rad] the last step's full step (before halving or restoring; not held), a view: read it at once."""
+        return self._first if self._first is not None else (
+            self._cache.dq0 if self._cache.out[ak.R_RESTORED] else self._work.dq)
+
     def _adapt_damping(self, lam: np.ndarray, damping: float, verdict: str, accepted: bool, tries: int) -> None:
         """Levenberg-Marquardt on ``lam`` (1,): lower it after a full step taken, raise it after a worse one."""
         s = self._settings
@@ -476,13 +481,6 @@ class Controller:
             if restored[0] != WORSE:
                 return restored, q3, R3, p3, state3
         return (verdict,) + first
-
-    def first_step(self) -> np.ndarray:
-        """(n_dofs,) [rad] the full step the last :meth:`step` that was not held computed at its start pose (before
-        halving or restoring steps). A view into the controller's buffers: read it before the next step."""
-        if self._first is not None:
-            return self._first
-        return self._cache.dq0 if self._cache.out[ak.R_RESTORED] else self._work.dq
 
     def target_cost(self, R, p) -> float:
         """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
