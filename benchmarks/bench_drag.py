@@ -88,8 +88,9 @@ def _drag(posture: str | None, hand_priority: int, frames: int, solve: bool, **s
         poses_q.append(r.q)
         points.append(solver.world_positions())
         costs.append(_posture_cost(solver))
-    return dict(us=1e6 * float(np.median(times)), hands=hands, pins=pins, iterations=float(np.median(iterations)),
-                q=np.array(poses_q), points=np.array(points), cost=np.array(costs))
+    return {"us": 1e6 * float(np.median(times)), "hands": hands, "pins": pins,
+            "iterations": float(np.median(iterations)), "q": np.array(poses_q), "points": np.array(points),
+            "cost": np.array(costs)}
 
 
 def _posture_cost(solver) -> float:

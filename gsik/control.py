@@ -449,7 +449,7 @@ class Controller:
         return trial if trial[0][0] == BETTER else None
 
     def first_step(self) -> np.ndarray:
-        """(n_dofs,) [rad] the last step's full step (before halving or restoring; not held), a view: read it at once."""
+        """(n_dofs,) [rad] the last step's full step (before halving or restoring; not held): a view, read it now."""
         return self._first if self._first is not None else (
             self._cache.dq0 if self._cache.out[ak.R_RESTORED] else self._work.dq)
 

@@ -80,11 +80,11 @@ class SolverSettings:
             posture or balance: another while the last was taken and left a target off by more than
             :data:`gsik.control.TRACKING_ERROR` times its tolerance, so a dragged target keeps up (the studio's
             default is 3). 1: one linearisation a step, as the single level's.
-        posture_tolerance: A :meth:`Solver.solve` attempt with a posture (and no balance) ends once every target
-            is within its tolerances and the posture's predicted remaining change is at most this on every DOF
-            [rad]: the change the next steps would make, from the last two steps' sizes (a contraction's estimate,
-            :class:`gsik.stall.PostureSettle`). 0 disables: the attempt goes on until a step gains less than
-            ``settle_tolerance`` (a refused step, then damped ones: up to a stall). :meth:`Solver.step` ignores it.
+        posture_tolerance: A :meth:`Solver.solve` attempt with a posture (and no balance) ends at a step that
+            starts and ends with every target within its tolerances and whose full step changes no DOF by more than
+            this [rad]: the posture's Gauss-Newton estimate of the change still to come
+            (:class:`gsik.stall.PostureSettle`). 0 disables: the attempt goes on until a step gains less than
+            ``settle_tolerance`` or the stall window ends it. :meth:`Solver.step` ignores it.
         warm_start: Start each frame's sweeps from the previous frame's ``dq``
             (in a solve, each linearisation's from the last step taken).
         orientation_weight: Weight of orientation rows relative to position

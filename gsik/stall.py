@@ -72,19 +72,19 @@ def unmet_levels(met: np.ndarray, posture_on: bool) -> list[bool]:
     return unmet
 
 
-
 class PostureSettle:
     """Whether a prioritised solve's posture has settled, in its own terms: the change its next step would make.
 
     With every target within its tolerances, a prioritised step is the posture's Gauss-Newton step in the targets'
     tangent null space: its largest change of one DOF [rad] estimates how far the posture's optimum still is. The
-    estimate is short by the factor ``1 / (1 - theta)`` of the linear contraction that the constraints' curvature
-    (the targets' multipliers times their second derivatives, which the step ignores) leaves: measured on
-    bench_drag, consecutive steps shrink about 3x (``theta`` about 1/3). The posture has settled when a step
+    constraints' curvature (the targets' multipliers times their second derivatives), which the step ignores, makes
+    the steps a linear contraction (bench_drag with a posture of weight 1: each step 2-7x shorter than the last), so
+    the estimate is short by about ``1 / (1 - theta)``; near a fold of the targets' reach the steps may instead
+    reverse (the studio's drag, arms nearly straight), and no step settles. The posture has settled when a step
     computed with the targets within their tolerances at its start, and ending with them there, changes no DOF by
     more than the tolerance: the attempt ends there instead of going on until a step gains under
-    ``settle_tolerance`` (then, as a met target's in-band correction costs the posture more than that, refusals
-    while the damping climbs, until :class:`StallDetector` calls a stall).
+    ``settle_tolerance`` (a met target's in-band correction, part of every full step, costs the posture more than
+    that near its optimum: refusals while the damping climbs, until :class:`StallDetector` calls a stall).
 
     Args:
         tolerance: The largest change of one DOF [rad] of a step that settles the posture (0: never).

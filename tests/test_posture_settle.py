@@ -26,9 +26,9 @@ def test_the_start_of_a_step_is_where_the_last_one_ended():
     assert settle.settled(STEP, True)
 
 
-def _drag(biped, frames: int, **settings) -> list:
+def _drag(biped, frames: int, **settings) -> tuple[list, gsik.control.Posture]:
     """Warm solves of a short drag: pelvis and left foot held, both hands pulled and moved round a circle at priority
-    0, the pulled pose as the posture (bench_drag's "posture, hands at 0")."""
+    0, the pulled pose as the posture (bench_drag's "posture, hands at 0"): every frame's result, and the posture."""
     solver = gsik.Solver(biped, **settings)
     rest = solver.effector_poses()
 
@@ -42,17 +42,18 @@ def _drag(biped, frames: int, **settings) -> list:
 
     solver.solve(targets(0))
     solver.set_posture(solver.q)
-    return [solver.solve(targets(f)) for f in range(1, frames + 1)] + [solver.posture]
+    return [solver.solve(targets(f)) for f in range(1, frames + 1)], solver.posture
 
 
-def _posture_cost(posture, q):
+def _posture_cost(posture, q) -> float:
+    """``0.5 (q - reference)^T P (q - reference)`` of a posture with per-DOF weights."""
     d = q - posture.reference
     return 0.5 * d @ (posture.precision * d)
 
 
 def test_a_settled_posture_ends_warm_solves_sooner_with_the_targets_met_and_the_posture_kept(biped):
-    *on, posture = _drag(biped, 12)
-    *off, _ = _drag(biped, 12, posture_tolerance=0.0)
+    on, posture = _drag(biped, 12)
+    off, _ = _drag(biped, 12, posture_tolerance=0.0)
     assert all(r.status is gsik.Status.CONVERGED for r in on + off)
     assert sum(r.iterations for r in on) < sum(r.iterations for r in off)
     for a, b in zip(on, off):  # the posture no worse than 1% of its cost with the test off
