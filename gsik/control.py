@@ -104,9 +104,10 @@ class Controller:
         self._posture = posture
         n = skeleton.n_dofs
         # The posture's precision factored once (a learned prior's is a full matrix): each step only multiplies.
-        self._posture_rows = ck.PostureRows(np.zeros(n), np.zeros((0, n))) if posture is None else \
+        self._posture_rows = ck.PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1)) if posture is None else \
             ck.PostureRows(np.array(posture.reference, dtype=float), np.ascontiguousarray(posture_factor(
-                posture.precision)))
+                posture.precision)), np.ones(1))
+        self.posture_gain = self._posture_rows.gain  # (1,) the share of the posture's step taken: 1 but in solve()
         self._lower, self._upper = np.array(skeleton.lower, dtype=float), np.array(skeleton.upper, dtype=float)
         self._tols = (RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE)
         self._balance = balance
