@@ -117,24 +117,24 @@ class PostureSettle:
         Args:
             step: (n_dofs,) the full prioritised step computed at the step's start pose [rad], whether it was taken
                 whole, halved or refused.
-            moved: (n_dofs,) the change of the angles the step made [rad] (0 if refused).
+            moved: (n_dofs,) the change of the angles the step made [rad] (0 if refused); kept, not copied.
             converged: Every target is within its tolerances after the step.
         """
         within, self._converged = self._converged and converged, converged
-        gain = float(self.gain[0])
-        full = float(np.max(np.abs(step), initial=0.0))
-        if within and full > 0.0 and float(np.max(np.abs(moved))) >= 0.5 * full:  # a posture move, not a halving
-            self._secant(moved)
-        elif not within:
+        if not within:
             self._moved = None
-        return within and full <= self._tolerance * gain
+            return False
+        gain = float(self.gain[0])
+        full = float(np.abs(step).max())
+        if full > 0.0 and float(np.abs(moved).max()) >= 0.5 * full:  # a posture move, not a halving
+            self._secant(moved)
+        return full <= self._tolerance * gain
 
     def _secant(self, moved: np.ndarray) -> None:
         """The gain from this posture move (n_dofs,) [rad] and the last one, when they lie along one line."""
-        last, self._moved = self._moved, moved.copy()
+        last, self._moved = self._moved, moved
         if last is None:
             return
-        dot, mm, ll = float(moved @ last), float(moved @ moved), float(last @ last)
-        mu = dot / ll
-        if dot * dot >= COLLINEAR * mm * ll and mu < 1.0:
-            self.gain[0] = min(1.0, max(MIN_POSTURE_GAIN, float(self.gain[0]) / (1.0 - mu)))
+        dot, mm, ll = float(moved.dot(last)), float(moved.dot(moved)), float(last.dot(last))
+        if dot * dot >= COLLINEAR * mm * ll and dot < ll:  # along one line, mu = dot / ll below 1
+            self.gain[0] = min(1.0, max(MIN_POSTURE_GAIN, float(self.gain[0]) / (1.0 - dot / ll)))
