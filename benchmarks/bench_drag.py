@@ -6,7 +6,11 @@ then dragged position-only round a 0.1 m circle (one turn per 100 frames) for ``
 
 - ``step``: one ``Solver.step()`` a frame: median µs, frames with both hands within 1 mm, frames with both pins
   within 0.1 mm;
-- ``solve``: one ``Solver.solve()`` a frame, warm from the last frame: median ms and linearisations.
+- ``solve``: one ``Solver.solve()`` a frame, warm from the last frame: median ms and linearisations; where the
+  settings have ``posture_tolerance``, the quality of its settle test against a drag solved with it off (0: a solve
+  goes on until a step gains under ``settle_tolerance``): the largest joint-angle difference [rad] and effector
+  difference [mm] over every frame and joint, and the range of the posture's cost ratio (frames whose posture cost
+  with it off is at least 1e-3).
 
 Paths: plain (every target at priority 0, no posture: the fast kernel), the posture with the hands at priority 0
 (targets as hard constraints, posture below) and at 1 (the studio's pins), and the studio's default: pins, hands at
@@ -65,12 +69,13 @@ def _solver(posture: str | None, hand_priority: int):
     return solver, poses
 
 
-def _drag(posture: str | None, hand_priority: int, frames: int, solve: bool) -> dict:
+def _drag(posture: str | None, hand_priority: int, frames: int, solve: bool, **settings) -> dict:
     solver, poses = _solver(posture, hand_priority)
+    solver.configure(**settings)
     start = solver.q
     solver.step() if not solve else solver.solve()  # build what the path builds once
     solver.set_q(start)
-    times, hands, pins, iterations = [], 0, 0, []
+    times, hands, pins, iterations, poses_q, points, costs = [], 0, 0, [], [], [], []
     for frame in range(frames):
         targets = _targets(poses, frame, hand_priority)
         t0 = time.perf_counter()
@@ -80,27 +85,71 @@ def _drag(posture: str | None, hand_priority: int, frames: int, solve: bool) -> 
         hands += max(e["left_hand"][0], e["right_hand"][0]) <= 1e-3
         pins += max(e["pelvis"][0], e["left_foot"][0]) <= 1e-4
         iterations.append(r.iterations)
-    return dict(us=1e6 * float(np.median(times)), hands=hands, pins=pins, iterations=float(np.median(iterations)))
+        poses_q.append(r.q)
+        points.append(solver.world_positions())
+        costs.append(_posture_cost(solver))
+    return {"us": 1e6 * float(np.median(times)), "hands": hands, "pins": pins,
+            "iterations": float(np.median(iterations)), "q": np.array(poses_q), "points": np.array(points),
+            "cost": np.array(costs)}
+
+
+def _posture_cost(solver) -> float:
+    """``0.5 (q - reference)^T P (q - reference)`` of the solver's posture (0 without one)."""
+    p = solver.posture
+    if p is None:
+        return 0.0
+    d = solver.q - p.reference
+    return 0.5 * float(d @ (p.precision * d if p.precision.ndim == 1 else p.precision @ d))
+
+
+def _solve_drag(posture: str | None, hand_priority: int, frames: int) -> dict:
+    """The solve drag, and where the settings have ``posture_tolerance`` its quality against the drag with it off:
+    ``dq`` the largest joint-angle difference [rad], ``dx`` the largest frame position difference [m], ``ratio``
+    (least, largest) posture cost ratio over the frames whose cost with it off is at least 1e-3."""
+    import gsik
+
+    run = _drag(posture, hand_priority, frames, True)
+    if posture is None or "posture_tolerance" not in gsik.solver.setting_names():
+        return _plain(run)
+    off = _drag(posture, hand_priority, frames, True, posture_tolerance=0.0)
+    kept = off["cost"] >= 1e-3
+    ratio = run["cost"][kept] / off["cost"][kept]
+    return dict(_plain(run), dq=float(np.abs(run["q"] - off["q"]).max()),
+                dx=float(np.linalg.norm(run["points"] - off["points"], axis=-1).max()),
+                ratio=(float(ratio.min()), float(ratio.max())) if ratio.size else None)
+
+
+def _plain(run: dict) -> dict:
+    """``run``'s figures without its per-frame arrays (what the JSON between checkouts carries)."""
+    return {k: v for k, v in run.items() if k not in ("q", "points", "cost")}
 
 
 def run(frames: int) -> dict:
     """``{path: {"step": ..., "solve": ...}}``."""
-    return {name: {"step": _drag(posture, prio, frames, False), "solve": _drag(posture, prio, frames, True)}
+    return {name: {"step": _plain(_drag(posture, prio, frames, False)), "solve": _solve_drag(posture, prio, frames)}
             for name, (posture, prio) in PATHS.items()}
 
 
 def _print(rows: dict, frames: int) -> None:
     print(f"load {os.getloadavg()[0]:.1f}; {frames} frames\n")
     print("| code | path | step µs (x plain) | hands within 1 mm | pins within 0.1 mm | warm solve() ms (x plain) "
-          "| linearisations |")
-    print("|---|---|---|---|---|---|---|")
+          "| linearisations | vs posture_tolerance 0: max rad, mm, cost ratio |")
+    print("|---|---|---|---|---|---|---|---|")
     for code, row in rows.items():
         plain = row["plain"]
         for name, r in row.items():
             s, v = r["step"], r["solve"]
             print(f"| {code} | {name} | {s['us']:.0f} ({s['us'] / plain['step']['us']:.1f}x) | {s['hands']}/{frames} "
                   f"| {s['pins']}/{frames} | {v['us'] / 1e3:.2f} ({v['us'] / plain['solve']['us']:.1f}x) "
-                  f"| {v['iterations']:.0f} |")
+                  f"| {v['iterations']:.0f} | {_quality(v)} |")
+
+
+def _quality(v: dict) -> str:
+    """The solve drag's quality column: ``-`` where there is none to show."""
+    if "dq" not in v:
+        return "-"
+    ratio = "-" if v["ratio"] is None else f"{v['ratio'][0]:.4f}-{v['ratio'][1]:.4f}"
+    return f"{v['dq']:.1e}, {1e3 * v['dx']:.2f}, {ratio}"
 
 
 def main() -> None:

@@ -13,6 +13,7 @@ from gsik.kernels import O_COST, O_FINITE, O_ITERATIONS, O_STATUS, O_STEP_NORM, 
 from gsik.kernels import solve as solve_kernels
 from gsik.result import _STATUSES, SolveResult, Status
 from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix
+from gsik.stall import PostureSettle
 from gsik.targets import Target
 
 #: Attempts ending with weighted errors this close (relative) found the same best reach ...
@@ -31,6 +32,10 @@ _POSITION_ROWS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 
 class AttemptPolicy:
     """:meth:`solve` and its attempts, for :class:`~gsik.solver.Solver`."""
+
+    #: ``(controller, angles' bytes, posture gain)``: where the last prioritised attempt with a posture ended, and
+    #: the share of the posture's step it had learnt (:class:`~gsik.stall.PostureSettle`).
+    _posture_gain: tuple = (None, b"", 1.0)
 
     def solve(self, targets: Mapping[str, Target | None] | None = None, q0=None) -> SolveResult:
         """Solve to convergence (or best reach) from ``q0`` (default: the current angles).
@@ -324,13 +329,34 @@ class AttemptPolicy:
         """``(last step's ControlStats or None, steps made)``: at most ``iterations`` prioritised steps."""
         lam = np.array([self._settings.damping])
         settles = self._posture is not None or self._balance  # keep going after convergence until they hold
+        posture = self._posture_settle(c)
         st = None
         it = 0
-        for it in range(1, iterations + 1):
-            st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
-            if st.held or (st.converged and not settles):
-                break
+        try:
+            for it in range(1, iterations + 1):
+                before = self._q.copy() if posture is not None else None
+                st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
+                if st.held or (st.converged and not settles):
+                    break
+                if posture is not None and posture.settled(c.first_step(), self._q - before, st.converged):
+                    st = st._replace(held=True)
+                    break
+        finally:
+            if posture is not None:  # the gain learnt stays for an attempt from here; a step takes it whole
+                self._posture_gain = (c, self._q.tobytes(), float(c.posture_gain[0]))
+                c.posture_gain[0] = 1.0
         return st, it
+
+    def _posture_settle(self, c) -> PostureSettle | None:
+        """The posture's step share and settle test for an attempt's steps (:class:`~gsik.stall.PostureSettle`;
+        the share the last attempt with this controller learnt if this one starts where it ended, as a drag's warm
+        solve does: the curvature it measured is that of this pose), or ``None`` without a posture, with balance (its
+        level's state is not the targets'), or at ``posture_tolerance`` 0."""
+        if self._posture is None or self._balance or self._settings.posture_tolerance <= 0.0:
+            return None
+        learnt = self._posture_gain
+        c.posture_gain[0] = learnt[2] if learnt[0] is c and learnt[1] == self._q.tobytes() else 1.0
+        return PostureSettle(self._settings.posture_tolerance, c.converged(self._ws.R, self._ws.p), c.posture_gain)
 
     def _control_status(self, c, st) -> Status:
         """How a prioritised attempt ended, given its last step ``st`` (None if it made none)."""

@@ -99,6 +99,8 @@ class Controller(ControlTargets):
 
     #: False: every step through the Python branches (the reference the compiled common path is tested against).
     compiled_step = True
+    #: The last step's full step when the Python branches judged it, ``None`` when the compiled call committed it.
+    _first: np.ndarray | None = None
 
     def __init__(self, skeleton, tasks, posture: Posture | None, balance: Balance | None, settings):
         self._sk = skeleton
@@ -108,9 +110,10 @@ class Controller(ControlTargets):
         self._posture = posture
         n = skeleton.n_dofs
         # The posture's precision factored once (a learned prior's is a full matrix): each step only multiplies.
-        self._posture_rows = ck.PostureRows(np.zeros(n), np.zeros((0, n))) if posture is None else \
+        self._posture_rows = ck.PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1)) if posture is None else \
             ck.PostureRows(np.array(posture.reference, dtype=float), np.ascontiguousarray(posture_factor(
-                posture.precision)))
+                posture.precision)), np.ones(1))
+        self.posture_gain = self._posture_rows.gain  # (1,) the share of the posture's step taken: 1 but in solve()
         self._lower, self._upper = np.array(skeleton.lower, dtype=float), np.array(skeleton.upper, dtype=float)
         self._tols = (RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE)
         self._balance = balance
@@ -272,6 +275,7 @@ class Controller(ControlTargets):
         state, the step, its trial and a better trial's commit are one compiled call
         (:func:`gsik.kernels.accept.control_step`)."""
         s = self._settings
+        self._first = None
         if self._rest_damping:
             lam[0], self._rest_damping = s.damping, False
         damping = float(lam[0]) if s.adaptive_damping else s.damping
@@ -298,6 +302,7 @@ class Controller(ControlTargets):
             if not fresh:
                 self._window.ring[:] = 0  # the pose changed from outside
             first, judged = self._first_trial(q, W, R, p, state0, damping), None
+        self._first = first
         tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first, judged)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
@@ -438,6 +443,11 @@ class Controller(ControlTargets):
         self._trial(q, self._solve(q, q, k), 1.0, W)
         trial = self._judge(q, W, state0, upto=k)
         return trial if trial[0][0] == BETTER else None
+
+    def first_step(self) -> np.ndarray:
+        """(n_dofs,) [rad] the last step's full step (before halving or restoring; not held): a view, read it now."""
+        return self._first if self._first is not None else (
+            self._cache.dq0 if self._cache.out[ak.R_RESTORED] else self._work.dq)
 
     def _adapt_damping(self, lam: np.ndarray, damping: float, verdict: str, accepted: bool, tries: int) -> None:
         """Levenberg-Marquardt on ``lam`` (1,): lower it after a full step taken, raise it after a worse one."""

@@ -17,7 +17,8 @@ from gsik.kernels import KernelSettings
 #: :meth:`Solver.solve` alike: fixed delta, PGS sweeps only, no step limit, no adaptive damping, no settling,
 #: no subspace minimisation, all rows from the start.
 PAPER_METHOD = MappingProxyType(dict(adaptive_damping=False, subspace_minimization=False, max_step=0.0,
-                                     settle_tolerance=0.0, positions_first=False, solve_max_step=0.0))
+                                     settle_tolerance=0.0, positions_first=False, solve_max_step=0.0,
+                                     posture_tolerance=0.0))
 
 
 #: Largest value of each whole-number setting: far above any useful value, low enough that every call ends soon
@@ -34,9 +35,9 @@ class SolverSettings:
     """Solver settings; every field is checked when the settings are made.
 
     Every setting reaches both :meth:`Solver.step` and :meth:`Solver.solve`,
-    except ``sweeps`` and ``max_step`` (a step's; a solve's linearisations
-    use ``solve_sweeps`` and ``solve_max_step``) and ``positions_first`` and
-    the last five, which only a solve reads. ``residual_tolerance`` and
+    except ``sweeps``, ``max_step`` and ``tracking_steps`` (a step's; a solve's linearisations
+    use ``solve_sweeps`` and ``solve_max_step``) and ``positions_first``, ``posture_tolerance``
+    and ``max_iterations`` to ``seed``, which only a solve reads. ``residual_tolerance`` and
     ``update_tolerance`` end the PGS sweeps; with ``subspace_minimization``
     each linear system is solved exactly instead, in a step as in a solve.
 
@@ -79,6 +80,12 @@ class SolverSettings:
             posture or balance: another while the last was taken and left a target off by more than
             :data:`gsik.control.TRACKING_ERROR` times its tolerance, so a dragged target keeps up (the studio's
             default is 3). 1: one linearisation a step, as the single level's.
+        posture_tolerance: A :meth:`Solver.solve` attempt with a posture (and no balance) ends at a step that
+            starts and ends with every target within its tolerances and whose estimate of the posture's change still
+            to come (its Gauss-Newton step) is at most this on every DOF [rad]; its steps take the share of the
+            posture's step that a secant along the last two moves calls for (:class:`gsik.stall.PostureSettle`).
+            0 disables both: the attempt goes on until a step gains less than ``settle_tolerance`` or the stall
+            window ends it. :meth:`Solver.step` ignores it.
         warm_start: Start each frame's sweeps from the previous frame's ``dq``
             (in a solve, each linearisation's from the last step taken).
         orientation_weight: Weight of orientation rows relative to position
@@ -121,6 +128,7 @@ class SolverSettings:
     restarts: int = 20
     seed: int = 0
     tracking_steps: int = 1
+    posture_tolerance: float = 1e-3
 
     def __post_init__(self):
         for f in fields(self):

@@ -70,3 +70,71 @@ def unmet_levels(met: np.ndarray, posture_on: bool) -> list[bool]:
     unmet = [not m for m in np.asarray(met, dtype=bool).tolist()]
     unmet[-1] = bool(posture_on)
     return unmet
+
+
+#: The least share of the posture's Gauss-Newton step a solve's step takes (:class:`PostureSettle`'s secant gain).
+MIN_POSTURE_GAIN = 0.1
+#: Two posture moves measure the curvature along one direction when the square of their cosine is at least this
+#: (within 25 degrees of one line): others turned, and their ratio says nothing about the step's length.
+COLLINEAR = 0.81
+
+
+class PostureSettle:
+    """A prioritised solve's posture: the share of its Gauss-Newton step each step takes, and whether it has settled.
+
+    With every target within its tolerances, a prioritised step is the posture's Gauss-Newton step in the targets'
+    tangent null space. That step ignores the constraints' curvature (the targets' multipliers times their second
+    derivatives): along the step the posture's true curvature is ``h`` times the one the step assumes, and steps
+    taking a share ``g`` of it shrink or swing by ``mu = 1 - g h`` a step (bench_drag: ``mu`` 0.1-0.5 with a posture
+    of weight 1; -1, a swing without end, with the studio's prior and the arms nearly straight, near a fold of the
+    hands' reach). Two consecutive posture moves ``m1``, ``m2`` along one line (:data:`COLLINEAR`) measure
+    ``mu = m2.m1 / m1.m1`` (a secant along the step), and the gain becomes ``g / (1 - mu)``, the share that would
+    have closed in at once (at most 1, at least :data:`MIN_POSTURE_GAIN`); the gain is written in place into the
+    controller's ``posture_gain``. A move is a posture move when it is at least half its step's full step (not a
+    halved trial, nor the target levels' step alone) and every target is within its tolerances at both its ends.
+
+    The posture has settled when a step computed with the targets within their tolerances at its start, and ending
+    with them there, estimates the posture's remaining change (its full step over the gain it was made with) at no
+    DOF above the tolerance [rad]: the attempt ends there instead of going on until a step gains under
+    ``settle_tolerance`` (near its optimum a met target's in-band correction, part of every full step, costs the
+    posture more than that: refusals while the damping climbs, until :class:`StallDetector` calls a stall).
+
+    Args:
+        tolerance: The largest remaining change of one DOF [rad] of a settled posture (0: never settled).
+        converged: Every target is within its tolerances at the start pose.
+        gain: (1,) the controller's posture gain, adapted in place.
+    """
+
+    def __init__(self, tolerance: float, converged: bool, gain: np.ndarray):
+        self._tolerance = tolerance
+        self._converged = converged
+        self.gain = gain
+        self._moved = None  # the last posture move (n_dofs,) [rad], or None
+
+    def settled(self, step: np.ndarray, moved: np.ndarray, converged: bool) -> bool:
+        """True if this step settles the posture; adapts the gain from this step's move and the last one's.
+
+        Args:
+            step: (n_dofs,) the full prioritised step computed at the step's start pose [rad], whether it was taken
+                whole, halved or refused.
+            moved: (n_dofs,) the change of the angles the step made [rad] (0 if refused); kept, not copied.
+            converged: Every target is within its tolerances after the step.
+        """
+        within, self._converged = self._converged and converged, converged
+        if not within:
+            self._moved = None
+            return False
+        gain = float(self.gain[0])
+        full = float(np.abs(step).max())
+        if full > 0.0 and float(np.abs(moved).max()) >= 0.5 * full:  # a posture move, not a halving
+            self._secant(moved)
+        return full <= self._tolerance * gain
+
+    def _secant(self, moved: np.ndarray) -> None:
+        """The gain from this posture move (n_dofs,) [rad] and the last one, when they lie along one line."""
+        last, self._moved = self._moved, moved
+        if last is None:
+            return
+        dot, mm, ll = float(moved.dot(last)), float(moved.dot(moved)), float(last.dot(last))
+        if dot * dot >= COLLINEAR * mm * ll and dot < ll:  # along one line, mu = dot / ll below 1
+            self.gain[0] = min(1.0, max(MIN_POSTURE_GAIN, float(self.gain[0]) / (1.0 - dot / ll)))

@@ -67,10 +67,12 @@ class PostureRows(NamedTuple):
     Attributes:
         reference: (n_dofs,) the preferred angles [rad].
         factor: (k, n_dofs) ``L`` with ``P = L^T L`` (k = 0: no posture).
+        gain: (1,) the share of the posture's Gauss-Newton step a step takes (its errors' scale; 1: all of it).
     """
 
     reference: np.ndarray
     factor: np.ndarray
+    gain: np.ndarray
 
 
 class ControlWork(NamedTuple):
@@ -187,7 +189,7 @@ def linearise(task_model, tasks, posture, q, R, p, e, wk):
         for d in range(n):
             wk.rows[mt + i, d] = L[i, d]
             s += L[i, d] * (ref[d] - q[d])
-        wk.errors[mt + i] = s
+        wk.errors[mt + i] = posture.gain[0] * s
         wk.weights[mt + i] = 1.0
 
 

@@ -1,0 +1,153 @@
+"""A prioritised solve's posture settle test (``posture_tolerance``, :class:`gsik.stall.PostureSettle`)."""
+
+import numpy as np
+import pytest
+
+import gsik
+from gsik.prior import bundled_prior, use_prior
+from gsik.stall import PostureSettle
+
+STEP = np.array([4e-4, -9e-4, 1e-4])  # a step [rad] within 1e-3 on every DOF
+
+
+def _settle(converged: bool = True, gain: float = 1.0) -> PostureSettle:
+    return PostureSettle(1e-3, converged, np.array([gain]))
+
+
+@pytest.mark.parametrize("start, end", [(False, True), (True, False), (False, False)])
+def test_a_small_step_settles_nothing_while_a_target_is_off_at_either_end(start, end):
+    assert not _settle(start).settled(STEP, STEP, end)
+
+
+def test_a_step_within_the_tolerance_on_every_dof_settles_the_posture():
+    assert _settle().settled(STEP, STEP, True)
+    assert _settle().settled(STEP, 0.0 * STEP, True)  # refused: what it would have done is within the tolerance
+    assert not _settle().settled(STEP * 1.2, STEP * 1.2, True)  # 1.08e-3 on one DOF
+
+
+def test_a_step_made_with_a_share_of_the_posture_step_estimates_all_of_it():
+    assert not _settle(gain=0.5).settled(STEP, STEP, True)  # the posture's own step: 1.8e-3 on one DOF
+    assert _settle(gain=0.5).settled(STEP / 2, STEP / 2, True)
+
+
+def test_the_start_of_a_step_is_where_the_last_one_ended():
+    settle = _settle()
+    assert not settle.settled(STEP, STEP, False)  # ended with a target off ...
+    assert not settle.settled(STEP, STEP, True)  # ... so the next one started with it off
+    assert settle.settled(STEP, STEP, True)
+
+
+MOVE = np.array([3e-2, -1e-2, 2e-2])  # a posture move [rad], far above the tolerance
+
+
+def _gain_after(*moves, gain: float = 1.0, step_scale: float = 1.0) -> float:
+    """The gain after posture moves ``moves``, each its step's full step times ``1 / step_scale``."""
+    settle = _settle(gain=gain)
+    for m in moves:
+        settle.settled(m / step_scale, m, True)
+    return float(settle.gain[0])
+
+
+def test_posture_moves_that_swing_back_halve_the_share_of_the_step_taken():
+    assert _gain_after(MOVE, -MOVE) == pytest.approx(0.5)  # mu = -1: the step was twice too long
+    assert _gain_after(MOVE, -0.75 * MOVE, gain=0.5) == pytest.approx(0.5 / 1.75)
+
+
+def test_posture_moves_that_close_in_slowly_take_more_of_the_step_up_to_all_of_it():
+    assert _gain_after(MOVE, 0.5 * MOVE, gain=0.25) == pytest.approx(0.5)
+    assert _gain_after(MOVE, 0.5 * MOVE, gain=0.8) == 1.0
+    assert _gain_after(MOVE, -10.0 * MOVE, gain=0.5) == pytest.approx(0.1)  # at least MIN_POSTURE_GAIN
+
+
+def test_moves_that_turn_or_are_not_the_posture_move_leave_the_share_as_it_is():
+    turned = np.array([1e-2, 3e-2, 0.0])  # orthogonal to MOVE: no curvature along one line measured
+    assert _gain_after(MOVE, turned, gain=0.5) == 0.5
+    assert _gain_after(MOVE, -MOVE, gain=0.5, step_scale=0.4) == 0.5  # each move under half its full step
+
+
+def _drag(biped, frames: int, **settings) -> tuple[list, gsik.control.Posture]:
+    """Warm solves of a short drag: pelvis and left foot held, both hands pulled and moved round a circle at priority
+    0, the pulled pose as the posture (bench_drag's "posture, hands at 0"): every frame's result, and the posture."""
+    solver = gsik.Solver(biped, **settings)
+    rest = solver.effector_poses()
+
+    def targets(frame):
+        out = {n: gsik.Target.from_transform(rest[n]) for n in ("pelvis", "left_foot")}
+        angle = 2.0 * np.pi * frame / 100
+        for hand in ("left_hand", "right_hand"):
+            moved = [0.1 * (np.cos(angle) - 1.0), 0.15, 0.1 * np.sin(angle)]
+            out[hand] = gsik.Target(rest[hand][:3, 3] + moved, position_only=True)
+        return out
+
+    solver.solve(targets(0))
+    solver.set_posture(solver.q)
+    return [solver.solve(targets(f)) for f in range(1, frames + 1)], solver.posture
+
+
+def _posture_cost(posture, q) -> float:
+    """``0.5 (q - reference)^T P (q - reference)`` of a posture with per-DOF weights."""
+    d = q - posture.reference
+    return 0.5 * d @ (posture.precision * d)
+
+
+def test_a_settled_posture_ends_warm_solves_sooner_with_the_targets_met_and_the_posture_kept(biped):
+    on, posture = _drag(biped, 12)
+    off, _ = _drag(biped, 12, posture_tolerance=0.0)
+    assert all(r.status is gsik.Status.CONVERGED for r in on + off)
+    assert sum(r.iterations for r in on) < sum(r.iterations for r in off)
+    for a, b in zip(on, off):  # the posture no worse than 1% of its cost with the test off
+        assert _posture_cost(posture, a.q) <= 1.01 * _posture_cost(posture, b.q)
+
+
+def test_a_step_ignores_the_posture_tolerance(biped):
+    def steps(**settings):
+        solver = gsik.Solver(biped, **settings)
+        solver.set_posture(biped.rest)
+        targets = {"left_hand": gsik.Target(solver.effector_poses()["left_hand"][:3, 3] + [0.05, 0.1, 0.0],
+                                            position_only=True, priority=1)}
+        return [solver.step(targets).q for _ in range(6)]
+
+    for a, b in zip(steps(), steps(posture_tolerance=0.0)):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_the_paper_method_has_no_posture_settle_test():
+    assert gsik.SolverSettings.paper().posture_tolerance == 0.0
+
+
+def test_a_negative_posture_tolerance_is_refused():
+    with pytest.raises(gsik.SolverError, match="posture_tolerance"):
+        gsik.SolverSettings(posture_tolerance=-1e-3)
+
+
+def _studio_drag(biped, frames: int, **settings) -> tuple[list, gsik.Solver, list]:
+    """Warm solves of the studio's drag (bench_drag's): pelvis and left foot held at 0, both hands pulled 0.15 m
+    and moved round a circle at 1, the bundled prior as the posture; the arms nearly straight, where the posture's
+    steps swing. Every frame's result, the solver, and the share of the posture's step each solve ended with."""
+    solver = gsik.Solver(biped, **settings)
+    rest = solver.effector_poses()
+
+    def targets(frame, priority=1):
+        out = {n: gsik.Target.from_transform(rest[n]) for n in ("pelvis", "left_foot")}
+        angle = 2.0 * np.pi * frame / 100
+        for hand in ("left_hand", "right_hand"):
+            moved = [0.1 * (np.cos(angle) - 1.0), 0.15, 0.1 * np.sin(angle)]
+            out[hand] = gsik.Target(rest[hand][:3, 3] + moved, position_only=True, priority=priority)
+        return out
+
+    solver.solve(targets(0, priority=0))
+    use_prior(solver, bundled_prior("biped"))
+    results, gains = [], []
+    for f in range(1, frames + 1):
+        results.append(solver.solve(targets(f)))
+        gains.append(solver._posture_gain[2])
+    return results, solver, gains
+
+
+def test_swinging_posture_steps_are_shortened_and_a_step_still_takes_the_whole_posture_step(biped):
+    on, solver, gains = _studio_drag(biped, 30)
+    off, _, _ = _studio_drag(biped, 30, posture_tolerance=0.0)
+    assert all(r.status is gsik.Status.CONVERGED for r in on + off)
+    assert sum(r.iterations for r in on) < sum(r.iterations for r in off)
+    assert min(gains) < 0.5  # the swing measured: less than half the posture's step, kept for the next solve ...
+    assert solver._make_controller().posture_gain[0] == 1.0  # ... but not for a step()
