@@ -132,9 +132,6 @@ class Solver(TargetSetting, AttemptPolicy):
         self._packed, W, self._q, self._ws = kernel_buffers.python_views(self._buffers)
         W[:] = self._W
         self._W = W
-        self._packed.rotation[:] = np.eye(3)
-        self._row_bytes = memoryview(self._buffers.floats).cast("B")  # the targets' rows begin at _rows_at bytes
-        self._rows_at = tuple(8 * i for i in kernel_buffers.target_rows_at(self._buffers.sizes))
         self._state = self._buffers.floats[: sk.n_dofs + 2 * m]
         n = sk.n_dofs  # where q, the position errors and the orientation errors lie in _state
         self._result_slices = (slice(0, n), slice(n, n + m), slice(n + m, n + 2 * m))
@@ -143,8 +140,7 @@ class Solver(TargetSetting, AttemptPolicy):
         self._ws.lam[0] = lam
         self._fk = kernels.compiled_entry(forward_kinematics, self._model, self._q, self._topo.root_frame, self._W,
                                           self._ws.R, self._ws.p)
-        self._inputs = self._solve_call = self._move_row = None  # the kernels' cached calls: made at first use
-        self._fast_rows = None  # move_target's rows: made at first use
+        self._inputs = self._solve_call = self._move_row = self._fast_rows = self._row_bytes = None  # at first use
         self._row_of = {name: k for k, name in enumerate(self._topo.effector_names)}
         self._layout = None  # the targets' layout the packed rows hold: None packs every row again
         self._refresh_frames()
@@ -161,14 +157,7 @@ class Solver(TargetSetting, AttemptPolicy):
         self._fast_rows = None  # move_target's rows: made again at its next call
         layout = tuple([(name, t.weight, t.position_only, t.priority) for name, t in self._targets.items()])
         if layout == self._layout:
-            # A Target's position (3,) and rotation (3, 3) are float64 in C order: their bytes go straight into
-            # the rows' bytes (a quarter of NumPy's item assignment).
-            rows, (p0, R0) = self._row_bytes, self._rows_at
-            for name, t in self._targets.items():
-                k = self._row_of.get(name)
-                if k is not None:
-                    rows[p0 + 24 * k:p0 + 24 * k + 24] = t.position.tobytes()
-                    rows[R0 + 72 * k:R0 + 72 * k + 72] = t.rotation.tobytes()
+            self._write_target_rows()
             self._is_controlled = self._posture is not None or self._balance or self._layout_controlled
             return
         self._layout, self._layout_controlled = layout, self._controlled_targets()
@@ -290,7 +279,7 @@ class Solver(TargetSetting, AttemptPolicy):
             self._q[:] = self._q_before  # the prioritised step went non-finite: undo it as the plain one is undone
             self._refresh_frames()
             return self._control_result(Status.REFUSED, 1, math.inf, 0.0, 1)
-        step, inputs = self._inputs or self._kernel_inputs()
+        step, inputs = self._inputs or self._step_inputs()
         if not step(*inputs):  # stats[O_FINITE] 0: the kernel did not take the step, the angles are the last finite
             self._refuse_non_finite(None, self._ws.stats)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
@@ -315,11 +304,18 @@ class Solver(TargetSetting, AttemptPolicy):
         stats[O_COST] = stats[O_RESIDUAL] = np.inf
         stats[O_STEP_NORM] = 0.0
 
-    def _kernel_inputs(self) -> tuple:
-        """``(step kernel, its arguments)``: persistent arrays, so this is built once per configuration."""
+    def _step_inputs(self) -> tuple:
+        """``(step kernel over the buffers, its arguments)``: persistent arrays, so this is built once per
+        configuration."""
         inputs = (self._settings.kernel_settings(), *self._buffers)
         self._inputs = (kernels.compiled_entry(step_kernels.step_buffers, *inputs), inputs)
         return self._inputs
+
+    def _kernel_inputs(self) -> tuple:
+        """``(step kernel, its named arguments)`` over the same memory (Table 1's kernel columns time it)."""
+        inputs = (self._model, self._settings.kernel_settings(), self._packed, self._topo.root_frame, self._W,
+                  self._q, self._ws)
+        return kernels.compiled_entry(step_kernels.step, *inputs), inputs
 
     def _result(self, st: np.ndarray, residual_index: int, attempts: int) -> SolveResult:
         # q and the (2, m) errors share one buffer: one copy, three views the caller owns.

@@ -114,6 +114,20 @@ class TargetSetting:
                 return
         self._move_checked(name, position, orientation)
 
+    def _write_target_rows(self) -> None:
+        """Each target's position and rotation into its effector's row. A :class:`Target`'s position (3,) and
+        rotation (3, 3) are float64 in C order: their bytes go straight into the rows' bytes (a quarter of NumPy's
+        item assignment)."""
+        if self._row_bytes is None:  # made once per buffer: the float buffer's bytes, where the rows begin
+            self._row_bytes = (memoryview(self._buffers.floats).cast("B"),
+                               *(8 * i for i in target_rows_at(self._buffers.sizes)))
+        rows, p0, R0 = self._row_bytes
+        for name, t in self._targets.items():
+            k = self._row_of.get(name)
+            if k is not None:
+                rows[p0 + 24 * k:p0 + 24 * k + 24] = t.position.tobytes()
+                rows[R0 + 72 * k:R0 + 72 * k + 72] = t.rotation.tobytes()
+
     def _make_fast_rows(self) -> dict:
         """``{target name: (compiled move_row_at, float buffer, position's index, rotation's index)}`` of the targets
         :meth:`move_target` writes straight into the kernels' rows (none on the prioritised path); made again

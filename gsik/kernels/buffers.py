@@ -95,7 +95,8 @@ def views(floats, ints, sizes):
 
 
 def make_buffers(model: KinematicModel, root: int) -> Buffers:
-    """Zeroed buffers for ``model`` with the IK root's frame ``root``, the model's arrays copied in."""
+    """Buffers for ``model`` with the IK root's frame ``root``: the model's arrays copied in, the targets'
+    rotations the identity, everything else zero."""
     nf, n, m = model.frame_parent.shape[0], model.lower.shape[0], model.effector_frame.shape[0]
     f_ends, i_ends = _float_ends.py_func(nf, n, m), _int_ends.py_func(nf, n, m)
     floats = np.zeros(f_ends[-1] + scratch_size(nf, n, m, False))
@@ -109,6 +110,8 @@ def make_buffers(model: KinematicModel, root: int) -> Buffers:
                                                           model.effector_frame, model.effector_dofs,
                                                           model.effector_dof_count)):
         ints[a:b] = values.ravel()
+    rotations, end = f_ends[7:9]
+    floats[rotations:end].reshape(m, 3, 3)[:] = np.eye(3)
     return Buffers(floats, ints, sizes)
 
 
