@@ -12,7 +12,8 @@ Modules: :mod:`~gsik.kernels.kinematics` (FK, errors, Jacobian, normal
 equations), :mod:`~gsik.kernels.pgs` (Projected Gauss-Seidel, bounded
 solve), :mod:`~gsik.kernels.step` (a frame step), :mod:`~gsik.kernels.solve` (a solve's attempt),
 :mod:`~gsik.kernels.priority` (the strict-priority step), :mod:`~gsik.kernels.control` (the prioritised step's
-level evaluation, packing and trial). Nothing
+level evaluation, packing and trial), :mod:`~gsik.kernels.buffers` (the plain step's arrays in two buffers,
+cut into these contracts inside the compiled call). Nothing
 here validates anything: the public modules check their inputs first.
 """
 
