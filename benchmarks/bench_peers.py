@@ -253,6 +253,9 @@ def main(argv=None) -> None:
     parser.add_argument("--rounds", type=int, default=2, help="alternations with --before")
     args = parser.parse_args(argv)
     if args.before is not None:
+        if not (args.before / ".venv" / "bin" / "python").is_file():
+            parser.error(f"--before {args.before}: no .venv/bin/python there (the checkout's own interpreter runs "
+                         "its gsik)")
         alternate(args)
         return
     placo, why = load_placo()
