@@ -100,16 +100,18 @@ class TargetSetting:
                 orientation that ``Target`` refuses (NaN, infinite, not a rotation ...). Nothing changes when it
                 raises.
         """
-        at = (self._fast_rows or self._make_fast_rows()).get(name)  # None: not on the single-level path's rows
+        rows = self._fast_rows
+        at = (self._make_fast_rows() if rows is None else rows).get(name)  # None: not on the single level's rows
         if at is not None and type(position) is np.ndarray and position.dtype is _F8 and position.shape == (3,):
             # The usual frame: float arrays that pass Target's checks as they are go straight into the row.
+            move, floats, p_at, R_at = at
             if orientation is None:
-                if at[0](position, _KEEP, at[1], at[2], at[3]) == WRITTEN:
+                if move(position, _KEEP, floats, p_at, R_at) == WRITTEN:
                     if name not in self._moved:
                         self._moved[name] = (None, False)
                     return
             elif type(orientation) is np.ndarray and orientation.dtype is _F8 and orientation.shape == (3, 3) \
-                    and at[0](position, orientation, at[1], at[2], at[3]) == WRITTEN:
+                    and move(position, orientation, floats, p_at, R_at) == WRITTEN:
                 self._moved[name] = _TURNED
                 return
         self._move_checked(name, position, orientation)
