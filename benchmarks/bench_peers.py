@@ -21,6 +21,10 @@ joint ranges), read by both peers. Two measures, each with 6-DOF targets and wit
 
 placo is an optional peer (``pip install placo``, or the ``peers`` extra); without it the benchmark says why and
 prints gsik's figures alone. Timings on a shared machine are noisy: compare the peers within one run.
+
+``--before CHECKOUT`` compares with another checkout of gsik in the same period: ``--rounds`` times, this
+checkout's run then the other's (the same script run by ``CHECKOUT/.venv/bin/python``, so with that checkout's
+gsik; placo where that interpreter has it), each printing its table.
 """
 
 from __future__ import annotations
@@ -29,6 +33,8 @@ import argparse
 import math
 import os
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -243,7 +249,15 @@ def main(argv=None) -> None:
     parser.add_argument("--problems", type=int, default=200, help="reach targets per chain and kind")
     parser.add_argument("--frames", type=int, default=300, help="tracking frames round the circle")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--before", type=Path, help="another checkout of gsik (with its .venv) to alternate with")
+    parser.add_argument("--rounds", type=int, default=2, help="alternations with --before")
     args = parser.parse_args(argv)
+    if args.before is not None:
+        if not (args.before / ".venv" / "bin" / "python").is_file():
+            parser.error(f"--before {args.before}: no .venv/bin/python there (the checkout's own interpreter runs "
+                         "its gsik)")
+        alternate(args)
+        return
     placo, why = load_placo()
     print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores; gsik {gsik.__file__}")
     if placo is None:
@@ -263,6 +277,16 @@ def main(argv=None) -> None:
                     print(_row(label, f, both), flush=True)
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}; {args.problems} reach targets per row (seed "
           f"{args.seed}), {args.frames} tracking frames; medians over problems / frames")
+
+
+def alternate(args) -> None:
+    """``args.rounds`` times: this checkout's run, then ``args.before``'s (its own interpreter), one after the other."""
+    common = ["--problems", str(args.problems), "--frames", str(args.frames), "--seed", str(args.seed)]
+    runs = {"this checkout": sys.executable, f"before: {args.before}": str(args.before / ".venv" / "bin" / "python")}
+    for r in range(1, args.rounds + 1):
+        for label, python in runs.items():
+            print(f"\n## {label}, round {r} of {args.rounds}", flush=True)
+            subprocess.run([python, str(Path(__file__).resolve())] + common, check=True)
 
 
 if __name__ == "__main__":

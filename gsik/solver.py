@@ -19,8 +19,9 @@ from gsik import control, kernels
 from gsik.attempts import SETTLED_AGREEMENT, SETTLED_REPEATS, AttemptPolicy  # noqa: F401  (re-exported)
 from gsik.balance import center_of_mass
 from gsik.errors import SolverError, choices, show_value
-from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS, TargetArrays
+from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS
 from gsik.kernels import solve as solve_kernels  # noqa: F401  (gsik.solver.solve_kernels, as before)
+from gsik.kernels import buffers as kernel_buffers
 from gsik.kernels import step as step_kernels
 from gsik.kernels.kinematics import forward_kinematics
 from gsik.kinematics import Topology, kinematic_model, topology
@@ -125,37 +126,38 @@ class Solver(TargetSetting, AttemptPolicy):
         sk = self._skeleton
         self._target_frames = frozenset(sk.target_names)  # once, not per target set: set_targets runs per frame
         m = len(self._topo.effector_names)
-        self._packed = TargetArrays(np.zeros((m, 3)), np.tile(np.eye(3), (m, 1, 1)), np.zeros((m, 6)))
-        # q and the errors live in one buffer so a result copies them at once.
-        self._state = np.zeros(sk.n_dofs + 2 * m)
-        self._q = self._state[: sk.n_dofs]
-        self._result_ends = (sk.n_dofs, sk.n_dofs + m)  # where q, then the position errors end in _state
+        # Targets, root transform, angles and workspace are views of one buffer the step kernel takes whole
+        # (gsik.kernels.buffers); q and the errors lead it, so a result copies them at once.
+        self._buffers = kernel_buffers.make_buffers(self._model, self._topo.root_frame)
+        self._packed, W, self._q, self._ws = kernel_buffers.python_views(self._buffers)
+        W[:] = self._W
+        self._W = W
+        self._state = self._buffers.floats[: sk.n_dofs + 2 * m]
+        n = sk.n_dofs  # where q, the position errors and the orientation errors lie in _state
+        self._result_slices = (slice(0, n), slice(n, n + m), slice(n + m, n + 2 * m))
         self._q[:] = q
         self._q_before = np.empty(sk.n_dofs)  # a prioritised step's starting angles, to undo a non-finite one
-        self._ws = kernels.make_workspace(sk.n_frames, sk.n_dofs, m, err=self._state[sk.n_dofs:].reshape(2, m))
         self._ws.lam[0] = lam
-        self._inputs = self._solve_call = self._move_row = None  # the kernels' cached calls: made at first use
+        self._fk = kernels.compiled_entry(forward_kinematics, self._model, self._q, self._topo.root_frame, self._W,
+                                          self._ws.R, self._ws.p)
+        self._inputs = self._solve_call = self._move_row = self._fast_rows = self._row_bytes = None  # at first use
         self._row_of = {name: k for k, name in enumerate(self._topo.effector_names)}
         self._layout = None  # the targets' layout the packed rows hold: None packs every row again
         self._refresh_frames()
         self._pack_targets()
 
     def _refresh_frames(self) -> None:
-        forward_kinematics(self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
+        self._fk(self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
 
     def _pack_targets(self) -> None:
         """The targets into the kernels' rows. When only their positions and orientations changed since the last
         packing (a drag's every frame: same names, weights, position-only flags and priorities), only those are
         written; the rows without a target keep what the last full packing put there (weight 0: unused)."""
         self._controller = None
+        self._fast_rows = None  # move_target's rows: made again at its next call
         layout = tuple([(name, t.weight, t.position_only, t.priority) for name, t in self._targets.items()])
         if layout == self._layout:
-            tp, tR = self._packed.position, self._packed.rotation
-            for name, t in self._targets.items():
-                k = self._row_of.get(name)
-                if k is not None:
-                    tp[k] = t.position
-                    tR[k] = t.rotation
+            self._write_target_rows()
             self._is_controlled = self._posture is not None or self._balance or self._layout_controlled
             return
         self._layout, self._layout_controlled = layout, self._controlled_targets()
@@ -277,7 +279,7 @@ class Solver(TargetSetting, AttemptPolicy):
             self._q[:] = self._q_before  # the prioritised step went non-finite: undo it as the plain one is undone
             self._refresh_frames()
             return self._control_result(Status.REFUSED, 1, math.inf, 0.0, 1)
-        step, inputs = self._inputs or self._kernel_inputs()
+        step, inputs = self._inputs or self._step_inputs()
         if not step(*inputs):  # stats[O_FINITE] 0: the kernel did not take the step, the angles are the last finite
             self._refuse_non_finite(None, self._ws.stats)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
@@ -302,22 +304,28 @@ class Solver(TargetSetting, AttemptPolicy):
         stats[O_COST] = stats[O_RESIDUAL] = np.inf
         stats[O_STEP_NORM] = 0.0
 
+    def _step_inputs(self) -> tuple:
+        """``(step kernel over the buffers, its arguments)``: persistent arrays, so this is built once per
+        configuration."""
+        inputs = (self._settings.kernel_settings(), *self._buffers)
+        self._inputs = (kernels.compiled_entry(step_kernels.step_buffers, *inputs), inputs)
+        return self._inputs
+
     def _kernel_inputs(self) -> tuple:
-        """``(step kernel, its arguments)``: persistent arrays, so this is built once per configuration."""
+        """``(step kernel, its named arguments)`` over the same memory (Table 1's kernel columns time it)."""
         inputs = (self._model, self._settings.kernel_settings(), self._packed, self._topo.root_frame, self._W,
                   self._q, self._ws)
-        self._inputs = (kernels.compiled_entry(step_kernels.step, *inputs), inputs)
-        return self._inputs
+        return kernels.compiled_entry(step_kernels.step, *inputs), inputs
 
     def _result(self, st: np.ndarray, residual_index: int, attempts: int) -> SolveResult:
         # q and the (2, m) errors share one buffer: one copy, three views the caller owns.
         out = self._state.copy()
-        n, nm = self._result_ends
+        q, pos, ori = self._result_slices  # slice objects made once: cheaper than slicing with literals
         stats = st.tolist()
         # tuple.__new__: every field given, so NamedTuple's own __new__ (a Python call with defaults) is skipped.
-        return _new_tuple(SolveResult, (out[:n], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
+        return _new_tuple(SolveResult, (out[q], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
                                         int(stats[O_SWEEPS]), stats[residual_index], self._topo.effector_names,
-                                        out[n:nm], out[nm:], stats[O_STEP_NORM], attempts))
+                                        out[pos], out[ori], stats[O_STEP_NORM], attempts))
 
     def set_root(self, name: str) -> None:
         """Make the joint or site ``name`` the IK root; the pose does not move.

@@ -10,9 +10,9 @@ import numpy as np
 
 from gsik import kernels
 from gsik.errors import TargetError, choices
-from gsik.kernels.targets import WRITTEN, move_row
-from gsik.targets import (EXACT_ROTATION, MAX_COORDINATE, PACK3_INTO, PACK9_INTO, Target, checked_position,
-                          checked_rotation)
+from gsik.kernels.buffers import target_rows_at
+from gsik.kernels.targets import WRITTEN, move_row_at
+from gsik.targets import PACK3_INTO, PACK9_INTO, Target, checked_position, checked_rotation
 
 #: Most enabled targets a solver takes at once (a tracked 100-joint clip uses about 200).
 MAX_TARGETS = 512
@@ -23,6 +23,8 @@ _KEEP = np.zeros((0, 0))
 _F8 = np.dtype(np.float64)
 #: Arrays of any layout (a column of a transform is strided): what the compiled entry is made for.
 _ANY_VECTOR, _ANY_MATRIX = np.zeros((3, 2))[:, 0], np.zeros((3, 6))[:, ::2]
+#: What a target moved with a rotation matrix records in ``_moved``: no quaternion given, its rotation turned.
+_TURNED = (None, True)
 
 
 class TargetSetting:
@@ -98,18 +100,49 @@ class TargetSetting:
                 orientation that ``Target`` refuses (NaN, infinite, not a rotation ...). Nothing changes when it
                 raises.
         """
-        k = self._row_of.get(name) if name in self._target_map else None
-        if k is not None and not self._is_controlled and type(position) is np.ndarray and position.dtype is _F8 \
-                and position.shape == (3,) and (orientation is None or (
-                    type(orientation) is np.ndarray and orientation.dtype is _F8 and orientation.shape == (3, 3))):
+        rows = self._fast_rows
+        at = (self._make_fast_rows() if rows is None else rows).get(name)  # None: not on the single level's rows
+        if at is not None and type(position) is np.ndarray and position.dtype is _F8 and position.shape == (3,):
             # The usual frame: float arrays that pass Target's checks as they are go straight into the row.
-            move = self._move_row or self._make_move_row()
-            turned = orientation is not None
-            if move(position, orientation if turned else _KEEP, MAX_COORDINATE, EXACT_ROTATION, self._packed.position,
-                    self._packed.rotation, k) == WRITTEN:
-                self._moved[name] = (None, True) if turned else self._moved.get(name, (None, False))
+            move, floats, p_at, R_at = at
+            if orientation is None:
+                if move(position, _KEEP, floats, p_at, R_at) == WRITTEN:
+                    if name not in self._moved:
+                        self._moved[name] = (None, False)
+                    return
+            elif type(orientation) is np.ndarray and orientation.dtype is _F8 and orientation.shape == (3, 3) \
+                    and move(position, orientation, floats, p_at, R_at) == WRITTEN:
+                self._moved[name] = _TURNED
                 return
         self._move_checked(name, position, orientation)
+
+    def _write_target_rows(self) -> None:
+        """Each target's position and rotation into its effector's row. A :class:`Target`'s position (3,) and
+        rotation (3, 3) are float64 in C order: their bytes go straight into the rows' bytes (a quarter of NumPy's
+        item assignment)."""
+        if self._row_bytes is None:  # made once per buffer: the float buffer's bytes, where the rows begin
+            self._row_bytes = (memoryview(self._buffers.floats).cast("B"),
+                               *(8 * i for i in target_rows_at(self._buffers.sizes)))
+        rows, p0, R0 = self._row_bytes
+        for name, t in self._targets.items():
+            k = self._row_of.get(name)
+            if k is not None:
+                rows[p0 + 24 * k:p0 + 24 * k + 24] = t.position.tobytes()
+                rows[R0 + 72 * k:R0 + 72 * k + 72] = t.rotation.tobytes()
+
+    def _make_fast_rows(self) -> dict:
+        """``{target name: (compiled move_row_at, float buffer, position's index, rotation's index)}`` of the targets
+        :meth:`move_target` writes straight into the kernels' rows (none on the prioritised path); made again
+        after the targets' packing changes (``_fast_rows`` None)."""
+        if self._is_controlled:
+            self._fast_rows = {}
+            return self._fast_rows
+        floats = self._buffers.floats
+        move = self._move_row or self._make_move_row()
+        p0, R0 = target_rows_at(self._buffers.sizes)
+        self._fast_rows = {name: (move, floats, p0 + 3 * k, R0 + 9 * k)
+                           for name in self._target_map if (k := self._row_of.get(name)) is not None}
+        return self._fast_rows
 
     def _move_checked(self, name: str, position, orientation) -> None:
         """:meth:`move_target` for any input: checked as :class:`Target` checks it, or refused."""
@@ -135,8 +168,7 @@ class TargetSetting:
 
     def _make_move_row(self):
         """:func:`gsik.kernels.targets.move_row`'s compiled entry (any layout of the given arrays), kept."""
-        rows = self._packed
-        self._move_row = kernels.compiled_entry(move_row, _ANY_VECTOR, _ANY_MATRIX, 0.0, 0.0, rows.position, rows.rotation, 0)
+        self._move_row = kernels.compiled_entry(move_row_at, _ANY_VECTOR, _ANY_MATRIX, self._buffers.floats, 0, 0)
         return self._move_row
 
     def _check_targets(self, targets: Mapping[str, Target | None]) -> dict[str, Target]:

@@ -12,7 +12,8 @@ Modules: :mod:`~gsik.kernels.kinematics` (FK, errors, Jacobian, normal
 equations), :mod:`~gsik.kernels.pgs` (Projected Gauss-Seidel, bounded
 solve), :mod:`~gsik.kernels.step` (a frame step), :mod:`~gsik.kernels.solve` (a solve's attempt),
 :mod:`~gsik.kernels.priority` (the strict-priority step), :mod:`~gsik.kernels.control` (the prioritised step's
-level evaluation, packing and trial). Nothing
+level evaluation, packing and trial), :mod:`~gsik.kernels.buffers` (the plain step's arrays in two buffers,
+cut into these contracts inside the compiled call). Nothing
 here validates anything: the public modules check their inputs first.
 """
 
@@ -151,15 +152,11 @@ def make_workspace(n_frames: int, n_dofs: int, n_effectors: int, err: np.ndarray
                      x=np.zeros(n_dofs), lam=np.zeros(1))
 
 
-@njit(cache=True)
-def make_scratch(n_frames, n, m, for_solve):
-    """A :class:`Scratch` (uninitialised) for ``n`` DOFs and ``m`` effectors; ``for_solve`` adds a solve's buffers.
-
-    One allocation, cut into the fields: each further allocation would cost as much as the cutting. The ends are
-    plain integers (an array of sizes and its cumulative sum would be two allocations more: 0.3-0.5 µs of a step).
-    """
+@njit(cache=True, inline="always")
+def _scratch_ends(n_frames, n, m, for_solve):
+    """Where each field of a :class:`Scratch` ends in its buffer (A first: the sweeps read it row by row)."""
     k = n if for_solve else 0
-    a = n * n  # A first: the sweeps read it row by row, aligned as allocated
+    a = n * n
     ad = a + k * k
     e = ad + 6 * m
     b = e + n
@@ -173,11 +170,33 @@ def make_scratch(n_frames, n, m, for_solve):
     en = pn + 2 * m
     M = en + 9
     v = M + 12 * n
-    buf = np.empty(v)
+    return a, ad, e, b, lo, hi, xp, qn, xs, Rn, pn, en, M, v
+
+
+def scratch_size(n_frames: int, n: int, m: int, for_solve: bool) -> int:
+    """Float64 entries a :class:`Scratch` takes (what :func:`cut_scratch` needs of its buffer)."""
+    return _scratch_ends.py_func(n_frames, n, m, for_solve)[-1]
+
+
+@njit(cache=True, inline="always")
+def cut_scratch(buf, n_frames, n, m, for_solve):
+    """A :class:`Scratch` cut from ``buf`` (at least :func:`scratch_size` float64 entries; contents unused)."""
+    k = n if for_solve else 0
+    a, ad, e, b, lo, hi, xp, qn, xs, Rn, pn, en, M, v = _scratch_ends(n_frames, n, m, for_solve)
     return Scratch(buf[ad:e], buf[:a].reshape((n, n)), buf[a:ad].reshape((k, k)), buf[e:b], buf[b:lo], buf[lo:hi],
                    buf[hi:xp], buf[xp:qn], buf[qn:xs], buf[xs:Rn].reshape((n_frames, 3, 3)),
                    buf[Rn:pn].reshape((n_frames, 3)), buf[pn:en].reshape((2, m)), buf[en:M].reshape((3, 3)),
                    buf[M:v].reshape((2, n, 6)))
+
+
+@njit(cache=True)
+def make_scratch(n_frames, n, m, for_solve):
+    """A :class:`Scratch` (uninitialised) for ``n`` DOFs and ``m`` effectors; ``for_solve`` adds a solve's buffers.
+
+    One allocation, cut into the fields: each further allocation would cost as much as the cutting. The ends are
+    plain integers (an array of sizes and its cumulative sum would be two allocations more: 0.3-0.5 µs of a step).
+    """
+    return cut_scratch(np.empty(_scratch_ends(n_frames, n, m, for_solve)[-1]), n_frames, n, m, for_solve)
 
 
 def compiled_entry(kernel, *args):

@@ -137,17 +137,20 @@ def _window_settled(settings, window_start, cost):
 
 
 @njit(cache=True)
-def _phase(model, settings, targets, root, W, q, budget, ws, sc, counts):
+def _phase(model, settings, targets, root, W, q, budget, ws, sc, counts, evaluated):
     """Iterate on ``targets`` from ``q`` for at most ``budget`` linearisations; returns ``(status, cost)``.
 
-    ``counts`` (2,) gains the linearisations and sweeps done.
+    ``counts`` (2,) gains the linearisations and sweeps done. ``evaluated``: NaN, or the cost at ``q`` whose
+    frames and errors ``ws`` already holds for these targets (the phase's first evaluation is then that one).
     """
     row_w = targets.row_weight
     pgs_stats = np.zeros(N_STATS)
     lam = max(settings.damping, 1e-3) if settings.adaptive_damping else settings.damping
     sc.x_prev[:] = 0.0
     sc.x_solve[:] = 0.0
-    cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
+    cost = evaluated
+    if math.isnan(cost):
+        cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
     window_start = cost
     for it in range(budget + 1):
         sc.err_new[:, :] = ws.err
@@ -195,9 +198,11 @@ def _rough(settings):
 
 
 @njit(cache=True)
-def _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts, staged):
+def _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts, staged, cost0):
     """Rounds of a positions-only phase (when ``staged``) then a full one, while a round stalls and lowers the
-    error by more than :data:`ROUND_GAIN`; ``q`` ends at the best pose unless converged. Returns the status."""
+    error by more than :data:`ROUND_GAIN`; ``q`` ends at the best pose unless converged. ``cost0``: the cost at
+    the start ``q``, whose frames and errors ``ws`` holds. Returns ``(status, the last phase's cost)``: when
+    converged, ``ws`` holds the frames and errors at ``q`` and that cost is theirs."""
     best_q = q.copy()
     best = np.inf
     status = BUDGET_EXHAUSTED
@@ -205,8 +210,11 @@ def _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts
         if staged:
             share = max(1, int(math.ceil(POSITION_PHASE_SHARE * max_iterations)))
             _phase(model, _rough(settings), _positions_only(targets), root, W, q,
-                   min(share, max_iterations - counts[0]), ws, sc, counts)
-        status, cost = _phase(model, settings, targets, root, W, q, max_iterations - counts[0], ws, sc, counts)
+                   min(share, max_iterations - counts[0]), ws, sc, counts, np.nan)
+        # The first full phase without a positions phase starts where solve evaluated: no second evaluation.
+        first = np.nan if staged or best < np.inf else cost0
+        status, cost = _phase(model, settings, targets, root, W, q, max_iterations - counts[0], ws, sc, counts,
+                              first)
         improved = cost < best * (1.0 - ROUND_GAIN)
         if cost < best:
             best = cost
@@ -215,7 +223,7 @@ def _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts
             break
     if status != CONVERGED:
         q[:] = best_q
-    return status
+    return status, cost
 
 
 @njit(cache=True)
@@ -239,10 +247,11 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
         q[i] = min(max(q[i], model.lower[i]), model.upper[i])
     sc = make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], True)
     counts = np.zeros(2, dtype=np.int64)
-    _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
-    staged = settings.positions_first and np.any((targets.row_weight[:, 3] > 0.0) & (ws.err[1] > STAGE_ANGLE))
-    status = _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts, staged)
     cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
+    staged = settings.positions_first and np.any((targets.row_weight[:, 3] > 0.0) & (ws.err[1] > STAGE_ANGLE))
+    status, cost = _rounds(model, settings, targets, root, W, q, max_iterations, ws, sc, counts, staged, cost)
+    if status != CONVERGED:  # q went back to the best pose: its frames and errors (converged: ws holds them)
+        cost = _evaluate(model, targets, root, W, q, ws.R, ws.p, sc.e, ws.err, sc.M)
     if _finish_errors(targets.row_weight, ws.err, settings.position_tolerance, settings.orientation_tolerance):
         status = CONVERGED
     st = ws.stats

@@ -3,10 +3,20 @@
 from __future__ import annotations
 
 from gsik._jit import njit
+from gsik.targets import EXACT_ROTATION, MAX_COORDINATE
 
 #: What :func:`move_row` returns: the row written, or nothing written (the caller's own checks then raise, or
 #: re-orthonormalise a rotation a little off, as :class:`gsik.Target` does).
 WRITTEN, NOT_WRITTEN = 0, 1
+
+
+@njit(cache=True)
+def move_row_at(position, rotation, floats, p_at, R_at):
+    """:func:`move_row` into a flat float64 buffer (:mod:`gsik.kernels.buffers`): the row's position at
+    ``floats[p_at:p_at + 3]``, its rotation row by row at ``floats[R_at:R_at + 9]``; :class:`gsik.Target`'s bounds
+    (:data:`gsik.targets.MAX_COORDINATE`, :data:`gsik.targets.EXACT_ROTATION`). Three arrays to unbox, not four."""
+    return move_row(position, rotation, MAX_COORDINATE, EXACT_ROTATION, floats[p_at:p_at + 3].reshape((1, 3)),
+                    floats[R_at:R_at + 9].reshape((1, 3, 3)), 0)
 
 
 @njit(cache=True)
