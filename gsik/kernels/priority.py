@@ -27,6 +27,7 @@ import numpy as np
 
 from gsik._jit import njit
 from gsik.kernels.pgs import _cholesky_solve
+from gsik.kernels.rows import axpy, axpy1, dot, dot1, rank1, reflect
 
 #: Status :func:`prioritized_step` returns: done, or a level's matrix held a non-finite number.
 OK, NOT_FINITE = 0, 1
@@ -165,7 +166,7 @@ def _project(JwT, m, Zt, z0, rz, identity, AT0, norm2, span):
         for d in range(n):
             a = Zt[z0 + c, d]
             if a != 0.0 and span[0, d] < span[1, d]:
-                _axpy(AT0, c, a, JwT, d, span[0, d], span[1, d])
+                axpy(AT0, c, a, JwT, d, span[0, d], span[1, d])
     total = 0.0
     for c in range(rz):
         for i in range(m):
@@ -246,80 +247,6 @@ def _active_first(wk, m, z0, rz, identity):
     return ra, identity
 
 
-# The helpers below are counted loops over 1-d row views, which LLVM vectorises (sweeps) or pipelines (four sums).
-# Hand-unrolled `while` loops measured 40 ns a call whatever the length, and loops indexing the 2-d arrays about
-# twice the views' time, at these lengths (tens).
-@njit(cache=True, inline="always")
-def _dot1(X, i, x, start, stop):
-    """``X[i, start:stop] @ x[start:stop]``."""
-    return _dot_views(X[i, start:stop], x[start:stop])
-
-
-@njit(cache=True, inline="always")
-def _dot(X, i, Y, j, start, stop):
-    """``X[i, start:stop] @ Y[j, start:stop]``."""
-    return _dot_views(X[i, start:stop], Y[j, start:stop])
-
-
-@njit(cache=True, inline="always")
-def _dot_views(a, b):
-    """``a @ b`` (views of one length) in four sums: one chain of dependent adds would bound it."""
-    n = a.shape[0]
-    s0 = 0.0
-    s1 = 0.0
-    s2 = 0.0
-    s3 = 0.0
-    for t in range(n // 4):
-        d = 4 * t
-        s0 += a[d] * b[d]
-        s1 += a[d + 1] * b[d + 1]
-        s2 += a[d + 2] * b[d + 2]
-        s3 += a[d + 3] * b[d + 3]
-    for d in range(n - n % 4, n):
-        s0 += a[d] * b[d]
-    return (s0 + s1) + (s2 + s3)
-
-
-@njit(cache=True, inline="always")
-def _axpy(X, i, a, Y, j, start, stop):
-    """``X[i, start:stop] += a * Y[j, start:stop]``."""
-    _add(X[i, start:stop], a, Y[j, start:stop])
-
-
-@njit(cache=True, inline="always")
-def _axpy1(x, a, Y, j, start, stop):
-    """``x[start:stop] += a * Y[j, start:stop]``."""
-    _add(x[start:stop], a, Y[j, start:stop])
-
-
-@njit(cache=True, inline="always")
-def _rank1(X, i, a, w, start, stop):
-    """``X[i, start:stop] += a * w[start:stop]``."""
-    _add(X[i, start:stop], a, w[start:stop])
-
-
-@njit(cache=True, inline="always")
-def _add(x, a, y):
-    """``x += a * y`` (views of one length)."""
-    for d in range(x.shape[0]):
-        x[d] += a * y[d]
-
-
-@njit(cache=True, inline="always")
-def _reflect(X, r0, v, vj, beta, first, stop, start, end, w):
-    """Rows ``r0 + first ... r0 + stop - 1`` of ``X`` times ``I - beta v v^T`` from the left, in columns
-    ``start:end`` (``v = V[vj, first:stop]``, ``w`` (end,) scratch): ``w = v^T X``, then ``X -= beta v w``, both
-    sweeps over contiguous rows."""
-    for c in range(start, end):
-        w[c] = 0.0
-    for i in range(first, stop):
-        if v[vj, i] != 0.0:  # a zero adds exactly nothing
-            _axpy1(w, v[vj, i], X, r0 + i, start, end)
-    for i in range(first, stop):
-        if v[vj, i] != 0.0:
-            _rank1(X, r0 + i, -beta * v[vj, i], w, start, end)
-
-
 @njit(cache=True)
 def _identity_into(Zt, n):
     for i in range(n):
@@ -343,7 +270,7 @@ def _factor(wk, m, rz, dq, pivot_tol):
         norm2[i] = 0.0
     for d in range(dq.shape[0]):
         if dq[d] != 0.0 and wk.span[0, d] < wk.span[1, d]:
-            _axpy1(res, -dq[d], wk.JwT, d, wk.span[0, d], wk.span[1, d])
+            axpy1(res, -dq[d], wk.JwT, d, wk.span[0, d], wk.span[1, d])
     for c in range(rz):
         a, a0 = AT[c, :m], wk.AT0[c, :m]
         for i in range(m):
@@ -364,7 +291,7 @@ def _factor(wk, m, rz, dq, pivot_tol):
             res[j], res[p] = res[p], res[j]
             norm2[p], exact[p] = norm2[j], exact[j]
         _reflect_pivot(AT, j, rz, wk.V, wk.beta)
-        _reflect(AT, 0, wk.V, j, wk.beta[j], j, rz, j + 1, m, wk.w)
+        reflect(AT, 0, wk.V, j, wk.beta[j], j, rz, j + 1, m, wk.w)
         for c in range(j + 1, m):
             norm2[c] -= AT[j, c] * AT[j, c]
             if norm2[c] <= _RECOMPUTE_BELOW * exact[c]:
@@ -398,9 +325,9 @@ def _damped_solve(wk, m, k, damping):
     AT, G, y = wk.AT, wk.G, wk.y  # R's rows: R[i, c] = AT[i, c] for c >= i
     while k > 0:
         for i in range(k):
-            y[i] = _dot1(AT, i, wk.res, i, m)
+            y[i] = dot1(AT, i, wk.res, i, m)
             for i2 in range(i + 1):
-                G[i, i2] = _dot(AT, i, AT, i2, i, m)
+                G[i, i2] = dot(AT, i, AT, i2, i, m)
             G[i, i] += damping
         if _cholesky_solve(G, y, k):
             return k
@@ -416,7 +343,7 @@ def _step_from(wk, k, rz, z0, identity):
     for i in range(rz):
         z[i] = wk.y[i] if i < k else 0.0
     for j in range(k - 1, -1, -1):
-        b = -wk.beta[j] * _dot1(wk.V, j, z, j, rz)
+        b = -wk.beta[j] * dot1(wk.V, j, z, j, rz)
         for i in range(j, rz):
             z[i] += b * wk.V[j, i]
     if identity:  # the unseen directions, if any, are the last unit rows (left in place): no step along them
@@ -425,7 +352,7 @@ def _step_from(wk, k, rz, z0, identity):
     else:
         step[:] = 0.0
         for c in range(rz):
-            _axpy1(step, z[c], wk.Zt, z0 + c, 0, n)
+            axpy1(step, z[c], wk.Zt, z0 + c, 0, n)
     for d in range(n):
         if wk.locked[d]:
             step[d] = 0.0
@@ -485,7 +412,7 @@ def _null_basis(wk, k, ra, z0):
                 end = d + 1
                 break
     for j in range(k):
-        _reflect(Zt, z0, wk.V, j, wk.beta[j], j, ra, first, end, wk.zw)
+        reflect(Zt, z0, wk.V, j, wk.beta[j], j, ra, first, end, wk.zw)
 
 
 @njit(cache=True)
@@ -511,10 +438,10 @@ def _without_dof(Zt, z0, rz, dof, u, w):
     w[:] = 0.0
     for c in range(rz):
         if u[c] != 0.0:  # a zero adds exactly nothing
-            _axpy1(w, u[c], Zt, z0 + c, 0, n)
+            axpy1(w, u[c], Zt, z0 + c, 0, n)
     for c in range(rz):
         if u[c] != 0.0:
-            _rank1(Zt, z0 + c, -scale * u[c], w, 0, n)
+            rank1(Zt, z0 + c, -scale * u[c], w, 0, n)
         Zt[z0 + c, dof] = 0.0  # exactly, not to rounding
     return scale
 
@@ -526,7 +453,7 @@ def _reflect_rows(AT0, m, rz, u, scale, w):
     for i in range(m):
         w[i] = 0.0
     for c in range(rz):
-        _axpy1(w, u[c], AT0, c, 0, m)
+        axpy1(w, u[c], AT0, c, 0, m)
     for c in range(1, rz):
         for i in range(m):
             AT0[c - 1, i] = AT0[c, i] - scale * u[c] * w[i]
