@@ -156,6 +156,32 @@ def test_no_levels_or_only_empty_ones_give_no_step():
     np.testing.assert_array_equal(prioritized_step([empty, empty], lo, hi, 1e-3), np.zeros(4))
 
 
+def test_a_level_of_zero_rows_gives_no_step_along_the_directions_it_does_not_see():
+    lo, hi = -np.ones(3), np.ones(3)
+    zero = Level(np.zeros((2, 3)), np.array([0.1, -0.5]), np.ones(2))
+    np.testing.assert_array_equal(prioritized_step([zero], lo, hi, 1e-3), np.zeros(3))
+    last_dof_unseen = Level(np.array([[1.0, 2.0, 0.0]]), np.array([0.3]), np.ones(1))
+    dq = prioritized_step([last_dof_unseen], lo, hi, 1e-3)
+    assert dq[2] == 0.0
+    np.testing.assert_allclose(dq, prioritized_step_svd([last_dof_unseen], lo, hi, 1e-3), atol=1e-12)
+
+
+def test_sparse_levels_as_the_drag_has_them_equal_the_svd_reference(rng):
+    """Pins on a few DOFs, hands on others, a diagonal posture below (a nonzero per row): the kernel factors only
+    the directions each level sees and multiplies only nonzeros, with the same step as the dense reference."""
+    n = 16
+    pins = np.zeros((6, n))
+    pins[:, :7] = rng.normal(size=(6, 7))
+    hands = np.zeros((3, n))
+    hands[:, 4:12] = rng.normal(size=(3, 8))
+    levels = [Level(pins, rng.normal(size=6) * 0.1, np.ones(6)), Level(hands, rng.normal(size=3) * 0.1, np.ones(3)),
+              posture_level(rng.normal(size=n) * 0.1, np.zeros(n), rng.uniform(0.5, 2.0, n))]
+    for width in (3.0, 0.02):  # roomy, and tight enough that DOFs lock
+        lo, hi = _box(rng, n, width)
+        np.testing.assert_allclose(prioritized_step(levels, lo, hi, [1e-6, 1e-6, 1e-3]),
+                                   prioritized_step_svd(levels, lo, hi, [1e-6, 1e-6, 1e-3]), atol=1e-10)
+
+
 def test_a_non_finite_jacobian_raises_as_the_svd_does(rng):
     J = rng.normal(size=(3, 5))
     J[1, 2] = np.nan

@@ -13,6 +13,9 @@
 (:func:`gsik.kernels.control.step_trial`), the rule, and when the trial is better the commit (pose, anchors, cache,
 damping). Anything else (a worse or unchanged trial, balance) it leaves to the controller's Python, with the trial in
 the work buffers.
+numba's cache checks a kernel against its own file only: the compiled strict-priority step
+(:mod:`gsik.kernels.priority`) is inside this module's cached kernels, and a change to that file alone leaves them
+stale (delete ``gsik/kernels/__pycache__/*.nb[ic]`` after one).
 """
 
 from __future__ import annotations

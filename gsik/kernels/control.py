@@ -14,6 +14,9 @@ The packed levels (:class:`gsik.priority.PackedLevels`) are the target levels in
 rows, filled by the caller, where it sits), then the posture's rows. Balance's state and rows are the caller's
 (:mod:`gsik.balance`): with balance on, the caller runs :func:`linearise`, fills its rows, then
 :func:`gsik.kernels.priority.prioritized_step` and :func:`trial`.
+numba's cache checks a kernel against its own file only: the compiled strict-priority step
+(:mod:`gsik.kernels.priority`) is inside this module's cached kernels, and a change to that file alone leaves them
+stale (delete ``gsik/kernels/__pycache__/*.nb[ic]`` after one).
 """
 
 from __future__ import annotations

@@ -7,9 +7,15 @@ small product, never a copy of the transpose.
 
 Per level, a Householder QR with column pivoting of ``A^T = (J Z)^T`` (rz, m) gives the rank ``k`` (pivots
 above ``rank_tol`` times the level's largest row norm), the row space of ``A`` (the first ``k`` columns of
-``Q``) and the directions left free below (the other columns). The damped least-squares step in the row space is the
+``Q``) and the directions left free below (the other columns, ``Z Q[:, k:]``: the reflections applied to the rows of
+``Zt`` in place, the next basis its rows from ``z0 + k``). The damped least-squares step in the row space is the
 ``k x k`` Cholesky solve ``(R_k R_k^T + damping I) y = R_k P^T r``, ``z = Q_k y``: the same step as the SVD's
 ``V_k diag(s / (s^2 + damping)) U_k^T r`` (both minimise ``|A z - r|^2 + damping |z|^2`` over the row space).
+
+Every matrix a reflection turns is stored with the reflected index first (``A^T`` as (rz, m) rows, the weighted
+rows transposed, the basis as rows): a reflection is then two sweeps of ``x += a * row`` over contiguous rows, which
+LLVM turns into vector operations, instead of one short dot product per row (a chain of dependent adds; about three
+times slower at these sizes).
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ import numpy as np
 
 from gsik._jit import njit
 from gsik.kernels.pgs import _cholesky_solve
+from gsik.kernels.rows import axpy, axpy1, dot, dot1, rank1, reflect
 
 #: Status :func:`prioritized_step` returns: done, or a level's matrix held a non-finite number.
 OK, NOT_FINITE = 0, 1
@@ -33,46 +40,48 @@ class Work(NamedTuple):
     """The kernel's buffers (:func:`make_work`), for ``n`` DOFs and levels of at most ``m`` rows.
 
     Attributes:
-        Zt: (n, n) the free basis, one direction a row (live rows ``z0:z0 + rz``). Qn: (n, n) the next one.
+        Zt: (n, n) the free basis, one direction a row (live rows ``z0:z0 + rz``).
         V: (n, n) the Householder vectors, one a row. G: (n, n) the damped normal matrix.
-        Jw: (m, n) the level's weighted rows. A0: (m, n) ``J Z``. A: (m, n) ``J Z``, factored.
-        RT: (n, m) ``R``'s leading rows. ew, res, norm2, norm2_exact: (m,) weighted errors, residual, pivot norms^2.
-        beta, y, z, step, u: (n,). locked: (n,) bool, the DOFs held at a bound.
+        JwT: (n, m) the level's weighted rows, transposed. AT0: (n, m) ``(J Z)^T``. AT: (n, m) ``(J Z)^T``, factored.
+        ew, res, norm2, norm2_exact, w: (m,) weighted errors, residual, pivot norms^2, a reflection's products.
+        beta, y, z, step, u, zw: (n,). locked: (n,) bool, the DOFs held at a bound.
+        span: (2, n) int64, the columns ``span[0, d]:span[1, d]`` of ``JwT``'s row ``d`` that hold its nonzeros.
     """
 
     Zt: np.ndarray
-    Qn: np.ndarray
     V: np.ndarray
     G: np.ndarray
-    Jw: np.ndarray
-    A0: np.ndarray
-    A: np.ndarray
-    RT: np.ndarray
+    JwT: np.ndarray
+    AT0: np.ndarray
+    AT: np.ndarray
     ew: np.ndarray
     res: np.ndarray
     norm2: np.ndarray
     norm2_exact: np.ndarray
+    w: np.ndarray
     beta: np.ndarray
     y: np.ndarray
     z: np.ndarray
     step: np.ndarray
     u: np.ndarray
+    zw: np.ndarray
     locked: np.ndarray
+    span: np.ndarray
 
 
 @njit(cache=True)
 def make_work(n, m):
     """A :class:`Work` (uninitialised but ``locked``, all False): one allocation, cut."""
-    sizes = (n * n, n * n, n * n, n * n, m * n, m * n, m * n, n * m, m, m, m, m, n, n, n, n, n)
+    sizes = (n * n, n * n, n * n, n * m, n * m, n * m, m, m, m, m, m, n, n, n, n, n, n)
     ends = np.cumsum(np.array(sizes))
     buf = np.empty(ends[-1])
     return Work(buf[:ends[0]].reshape((n, n)), buf[ends[0]:ends[1]].reshape((n, n)),
-                buf[ends[1]:ends[2]].reshape((n, n)), buf[ends[2]:ends[3]].reshape((n, n)),
-                buf[ends[3]:ends[4]].reshape((m, n)), buf[ends[4]:ends[5]].reshape((m, n)),
-                buf[ends[5]:ends[6]].reshape((m, n)), buf[ends[6]:ends[7]].reshape((n, m)),
-                buf[ends[7]:ends[8]], buf[ends[8]:ends[9]], buf[ends[9]:ends[10]], buf[ends[10]:ends[11]],
-                buf[ends[11]:ends[12]], buf[ends[12]:ends[13]], buf[ends[13]:ends[14]], buf[ends[14]:ends[15]],
-                buf[ends[15]:ends[16]], np.zeros(n, dtype=np.bool_))
+                buf[ends[1]:ends[2]].reshape((n, n)), buf[ends[2]:ends[3]].reshape((n, m)),
+                buf[ends[3]:ends[4]].reshape((n, m)), buf[ends[4]:ends[5]].reshape((n, m)),
+                buf[ends[5]:ends[6]], buf[ends[6]:ends[7]], buf[ends[7]:ends[8]], buf[ends[8]:ends[9]],
+                buf[ends[9]:ends[10]], buf[ends[10]:ends[11]], buf[ends[11]:ends[12]], buf[ends[12]:ends[13]],
+                buf[ends[13]:ends[14]], buf[ends[14]:ends[15]], buf[ends[15]:ends[16]], np.zeros(n, dtype=np.bool_),
+                np.empty((2, n), dtype=np.int64))
 
 
 @njit(cache=True)
@@ -105,8 +114,8 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
     for lv in range(last + 1):
         if rz == 0:
             break
-        m = _weigh(rows, errors, weights, starts[lv], starts[lv + 1], wk.Jw, wk.ew)
-        scale = _project(wk.Jw, m, wk.Zt, z0, rz, identity, wk.A0)
+        m = _weigh(rows, errors, weights, starts[lv], starts[lv + 1], wk.JwT, wk.ew, wk.w, wk.span)
+        scale = _project(wk.JwT, m, wk.Zt, z0, rz, identity, wk.AT0, wk.w, wk.span)
         if not math.isfinite(scale):
             return NOT_FINITE
         z0, rz, identity = _solve_level(wk, m, z0, rz, identity, dq, lo, hi, dampings[lv], rank_tol * scale, box_tol,
@@ -117,28 +126,55 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
 
 
 @njit(cache=True)
-def _weigh(rows, errors, weights, start, stop, Jw, ew):
-    """``Jw = sqrt(w) J``, ``ew = sqrt(w) e`` of rows ``start:stop``; returns their count."""
-    for i in range(stop - start):
+def _weigh(rows, errors, weights, start, stop, JwT, ew, norm2, span):
+    """``JwT = (sqrt(w) J)^T``, ``ew = sqrt(w) e`` of rows ``start:stop``, ``norm2`` their squared row norms,
+    ``span`` the nonzero columns of each row of ``JwT`` (a posture's diagonal factor: one each); returns their
+    count."""
+    m = stop - start
+    n = rows.shape[1]
+    for d in range(n):
+        span[0, d] = m
+        span[1, d] = 0
+    for i in range(m):
         sw = math.sqrt(weights[start + i])
         ew[i] = sw * errors[start + i]
-        for d in range(rows.shape[1]):
-            Jw[i, d] = sw * rows[start + i, d]
-    return stop - start
+        s = 0.0
+        for d in range(n):
+            v = sw * rows[start + i, d]
+            JwT[d, i] = v
+            s += v * v
+            if v != 0.0:
+                span[0, d] = min(span[0, d], i)
+                span[1, d] = i + 1
+        norm2[i] = s
+    return m
 
 
 @njit(cache=True)
-def _project(Jw, m, Zt, z0, rz, identity, A0):
-    """``A0 = J Z`` (m, rz); returns the largest row norm of ``J`` (not finite if ``A0`` or ``J`` holds a non-finite
-    number)."""
-    n = Jw.shape[1]
+def _project(JwT, m, Zt, z0, rz, identity, AT0, norm2, span):
+    """``AT0 = (J Z)^T`` (rz, m), over the nonzeros of ``Z`` and of ``J``'s columns (``span``; a zero's product adds
+    exactly nothing); returns the largest row norm of ``J`` (``norm2``: (m,) its squares), not finite if ``AT0`` or
+    ``J`` holds a non-finite number."""
+    n = JwT.shape[0]
+    for c in range(rz):
+        if identity:
+            for i in range(m):
+                AT0[c, i] = JwT[c, i]
+            continue
+        for i in range(m):
+            AT0[c, i] = 0.0
+        for d in range(n):
+            a = Zt[z0 + c, d]
+            if a != 0.0 and span[0, d] < span[1, d]:
+                axpy(AT0, c, a, JwT, d, span[0, d], span[1, d])
     total = 0.0
+    for c in range(rz):
+        for i in range(m):
+            total += AT0[c, i] * AT0[c, i]
     scale = 0.0
     for i in range(m):
-        for c in range(rz):
-            A0[i, c] = Jw[i, c] if identity else _dot(Jw, i, Zt, z0 + c, 0, n)
-        total += _dot(A0, i, A0, i, 0, rz)
-        scale = max(scale, _dot(Jw, i, Jw, i, 0, n))
+        total += norm2[i]
+        scale = max(scale, norm2[i])
     return math.sqrt(scale) if math.isfinite(total) else math.nan
 
 
@@ -149,15 +185,19 @@ def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_to
     n = dq.shape[0]
     while True:
         _into_box(dq, lo, hi, box_tol)
-        k = _factor(wk, m, rz, dq, pivot_tol)
+        ra, identity = _active_first(wk, m, z0, rz, identity)
+        k = _factor(wk, m, ra, dq, pivot_tol)
         k = _damped_solve(wk, m, k, damping)
-        _step_from(wk, k, rz, z0, identity)
+        _step_from(wk, k, ra, z0, identity)
         alpha, blocking = _largest_fraction(dq, wk.step, lo, hi, box_tol, box_rel_tol)
         if blocking < 0:
             for d in range(n):
                 dq[d] += wk.step[d]
             if basis_needed and k > 0:
-                return 0, _null_basis(wk, k, rz, z0, identity), False
+                if identity:
+                    _identity_into(wk.Zt, n)
+                _null_basis(wk, k, ra, z0)
+                return z0 + k, rz - k, False
             return z0, rz, identity
         for d in range(n):
             dq[d] += alpha * wk.step[d]
@@ -166,67 +206,45 @@ def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_to
         if identity:
             _identity_into(wk.Zt, n)
             identity = False
-        scale = _without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.z)
+        scale = _without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
         if scale > 0.0:
-            _reflect_columns(wk.A0, m, rz, wk.u, scale)
+            _reflect_rows(wk.AT0, m, rz, wk.u, scale, wk.w)
             z0 += 1
             rz -= 1
         if rz == 0:
             return z0, rz, identity
 
 
-@njit(cache=True, inline="always")
-def _dot(X, i, Y, j, start, stop):
-    """``X[i, start:stop] @ Y[j, start:stop]`` with four accumulators: the rows are short (tens), so one chain of
-    dependent adds, not the multiplies, would bound it (and they are too short for LLVM's vector loops)."""
-    r0 = r1 = r2 = r3 = 0.0
-    d = start
-    while d + 4 <= stop:
-        r0 += X[i, d] * Y[j, d]
-        r1 += X[i, d + 1] * Y[j, d + 1]
-        r2 += X[i, d + 2] * Y[j, d + 2]
-        r3 += X[i, d + 3] * Y[j, d + 3]
-        d += 4
-    while d < stop:
-        r0 += X[i, d] * Y[j, d]
-        d += 1
-    return (r0 + r1) + (r2 + r3)
-
-
-@njit(cache=True, inline="always")
-def _dot1(X, i, x, start, stop):
-    """``X[i, start:stop] @ x[start:stop]``."""
-    r0 = r1 = 0.0
-    d = start
-    while d + 2 <= stop:
-        r0 += X[i, d] * x[d]
-        r1 += X[i, d + 1] * x[d + 1]
-        d += 2
-    if d < stop:
-        r0 += X[i, d] * x[d]
-    return r0 + r1
-
-
-@njit(cache=True, inline="always")
-def _axpy(X, i, a, Y, j, start, stop):
-    """``X[i, start:stop] += a * Y[j, start:stop]``, four at a time, each four's loads before its stores: LLVM then
-    packs them into one vector operation without having to prove that X and Y do not overlap."""
-    d = start
-    while d + 4 <= stop:
-        x0, x1, x2, x3 = X[i, d], X[i, d + 1], X[i, d + 2], X[i, d + 3]
-        y0, y1, y2, y3 = Y[j, d], Y[j, d + 1], Y[j, d + 2], Y[j, d + 3]
-        X[i, d], X[i, d + 1], X[i, d + 2], X[i, d + 3] = x0 + a * y0, x1 + a * y1, x2 + a * y2, x3 + a * y3
-        d += 4
-    while d < stop:
-        X[i, d] += a * Y[j, d]
-        d += 1
-
-
-@njit(cache=True, inline="always")
-def _axpy1(x, a, Y, j, start, stop):
-    """``x[start:stop] += a * Y[j, start:stop]``."""
-    for d in range(start, stop):
-        x[d] += a * Y[j, d]
+@njit(cache=True)
+def _active_first(wk, m, z0, rz, identity):
+    """The live directions this level's rows do not see (``AT0``'s rows exactly zero: a DOF none of its rows moves)
+    moved behind the others, rows of ``AT0`` and ``Zt`` alike; returns ``(ra, identity)``: the directions it sees
+    come first, ``ra`` of them (the level's factorisation, step and reflections need only those), and whether the
+    basis is still the unstored identity."""
+    AT0, Zt = wk.AT0, wk.Zt
+    n = Zt.shape[1]
+    ra = rz
+    c = 0
+    while c < ra:
+        seen = False
+        for i in range(m):
+            if AT0[c, i] != 0.0:
+                seen = True
+                break
+        if seen:
+            c += 1
+            continue
+        ra -= 1
+        if c == ra:
+            break
+        if identity:
+            _identity_into(Zt, n)
+            identity = False
+        for i in range(m):
+            AT0[c, i], AT0[ra, i] = AT0[ra, i], AT0[c, i]
+        for d in range(n):
+            Zt[z0 + c, d], Zt[z0 + ra, d] = Zt[z0 + ra, d], Zt[z0 + c, d]
+    return ra, identity
 
 
 @njit(cache=True)
@@ -239,18 +257,27 @@ def _identity_into(Zt, n):
 
 @njit(cache=True)
 def _factor(wk, m, rz, dq, pivot_tol):
-    """The pivoted QR of ``A^T`` (``A = wk.A0``) into ``wk.A``, and the residual ``r = e - J dq`` into ``wk.res``.
+    """The pivoted QR of ``A^T`` (``wk.AT0``, (rz, m)) into ``wk.AT``, and the residual ``r = e - J dq`` into
+    ``wk.res``.
 
-    Afterwards the rows of ``A`` and ``res`` are in pivot order, ``A[c, i]`` (``i < k``, ``i <= c``) is
+    Afterwards the columns of ``AT`` and ``res`` are in pivot order, ``AT[i, c]`` (``i < k``, ``i <= c``) is
     ``R[i, c]``, and reflection ``j`` is ``I - beta[j] v v^T`` with ``v = V[j, j:rz]``. Returns the rank ``k``: the
     pivots above ``pivot_tol``.
     """
-    A, res, norm2, exact = wk.A, wk.res, wk.norm2, wk.norm2_exact
+    AT, res, norm2, exact = wk.AT, wk.res, wk.norm2, wk.norm2_exact
     for i in range(m):
-        res[i] = wk.ew[i] - _dot1(wk.Jw, i, dq, 0, dq.shape[0])
-        for c in range(rz):
-            A[i, c] = wk.A0[i, c]
-        norm2[i] = exact[i] = _dot(A, i, A, i, 0, rz)
+        res[i] = wk.ew[i]
+        norm2[i] = 0.0
+    for d in range(dq.shape[0]):
+        if dq[d] != 0.0 and wk.span[0, d] < wk.span[1, d]:
+            axpy1(res, -dq[d], wk.JwT, d, wk.span[0, d], wk.span[1, d])
+    for c in range(rz):
+        a, a0 = AT[c, :m], wk.AT0[c, :m]
+        for i in range(m):
+            a[i] = a0[i]
+            norm2[i] += a0[i] * a0[i]
+    for i in range(m):
+        exact[i] = norm2[i]
     for j in range(min(m, rz)):
         p = j
         for c in range(j + 1, m):
@@ -260,46 +287,47 @@ def _factor(wk, m, rz, dq, pivot_tol):
             return j
         if p != j:
             for i in range(rz):
-                A[j, i], A[p, i] = A[p, i], A[j, i]
+                AT[i, j], AT[i, p] = AT[i, p], AT[i, j]
             res[j], res[p] = res[p], res[j]
             norm2[p], exact[p] = norm2[j], exact[j]
-        _reflect_pivot(A, j, rz, wk.V, wk.beta)
+        _reflect_pivot(AT, j, rz, wk.V, wk.beta)
+        reflect(AT, 0, wk.V, j, wk.beta[j], j, rz, j + 1, m, wk.w)
         for c in range(j + 1, m):
-            _axpy(A, c, -wk.beta[j] * _dot(wk.V, j, A, c, j, rz), wk.V, j, j, rz)
-            norm2[c] -= A[c, j] * A[c, j]
+            norm2[c] -= AT[j, c] * AT[j, c]
             if norm2[c] <= _RECOMPUTE_BELOW * exact[c]:
-                norm2[c] = exact[c] = _dot(A, c, A, c, j + 1, rz)
+                s = 0.0
+                for i in range(j + 1, rz):
+                    s += AT[i, c] * AT[i, c]
+                norm2[c] = exact[c] = s
     return min(m, rz)
 
 
 @njit(cache=True)
-def _reflect_pivot(A, j, rz, V, beta):
-    """The reflection ``I - beta[j] v v^T`` (``v = V[j, j:rz]``) that maps ``A[j, j:rz]`` onto its first axis."""
+def _reflect_pivot(AT, j, rz, V, beta):
+    """The reflection ``I - beta[j] v v^T`` (``v = V[j, j:rz]``) that maps ``AT[j:rz, j]`` onto its first axis."""
+    s2 = 0.0
     for i in range(j, rz):
-        V[j, i] = A[j, i]
-    s2 = _dot(A, j, A, j, j, rz)
-    x0 = A[j, j]
+        V[j, i] = AT[i, j]
+        s2 += AT[i, j] * AT[i, j]
+    x0 = AT[j, j]
     alpha = -math.sqrt(s2) if x0 >= 0.0 else math.sqrt(s2)
     V[j, j] = x0 - alpha
     beta[j] = 1.0 / (s2 - x0 * alpha)  # 2 / |v|^2, |v|^2 = 2 (s2 - x0 alpha)
-    A[j, j] = alpha
+    AT[j, j] = alpha
     for i in range(j + 1, rz):
-        A[j, i] = 0.0
+        AT[i, j] = 0.0
 
 
 @njit(cache=True)
 def _damped_solve(wk, m, k, damping):
     """``wk.y`` (k,) solving ``(R_k R_k^T + damping I) y = R_k P^T r``; returns ``k``, lowered while that matrix is
     not numerically positive definite (only without damping, at a level all but rank-deficient)."""
-    RT, G, y = wk.RT, wk.G, wk.y
-    for i in range(k):  # R's rows, contiguous: R[i, c] = A[c, i] for c >= i
-        for c in range(i, m):
-            RT[i, c] = wk.A[c, i]
+    AT, G, y = wk.AT, wk.G, wk.y  # R's rows: R[i, c] = AT[i, c] for c >= i
     while k > 0:
         for i in range(k):
-            y[i] = _dot1(RT, i, wk.res, i, m)
+            y[i] = dot1(AT, i, wk.res, i, m)
             for i2 in range(i + 1):
-                G[i, i2] = _dot(RT, i, RT, i2, i, m)
+                G[i, i2] = dot(AT, i, AT, i2, i, m)
             G[i, i] += damping
         if _cholesky_solve(G, y, k):
             return k
@@ -309,22 +337,22 @@ def _damped_solve(wk, m, k, damping):
 
 @njit(cache=True)
 def _step_from(wk, k, rz, z0, identity):
-    """``wk.step = Z Q [y; 0]`` (n,), zero on the locked DOFs."""
+    """``wk.step = Z Q [y; 0]`` (n,) over the first ``rz`` live directions, zero on the locked DOFs."""
     z, step = wk.z, wk.step
     n = step.shape[0]
     for i in range(rz):
         z[i] = wk.y[i] if i < k else 0.0
     for j in range(k - 1, -1, -1):
-        b = -wk.beta[j] * _dot1(wk.V, j, z, j, rz)
+        b = -wk.beta[j] * dot1(wk.V, j, z, j, rz)
         for i in range(j, rz):
             z[i] += b * wk.V[j, i]
-    if identity:
+    if identity:  # the unseen directions, if any, are the last unit rows (left in place): no step along them
         for d in range(n):
-            step[d] = z[d]
+            step[d] = z[d] if d < rz else 0.0
     else:
         step[:] = 0.0
         for c in range(rz):
-            _axpy1(step, z[c], wk.Zt, z0 + c, 0, n)
+            axpy1(step, z[c], wk.Zt, z0 + c, 0, n)
     for d in range(n):
         if wk.locked[d]:
             step[d] = 0.0
@@ -366,37 +394,25 @@ def _largest_fraction(dq, step, lo, hi, box_tol, box_rel_tol):
 
 
 @njit(cache=True)
-def _null_basis(wk, k, rz, z0, identity):
-    """The free basis below this level, ``(Z Q[:, k:])^T``, into ``wk.Zt[:rz - k]``; returns ``rz - k``.
-
-    Each row of ``Q[:, k:]^T`` is ``H_0 ... H_(k-1) e_(k+a)``, the reflections applied last to first: the
-    vector stays zero above the reflection's start, so each costs only its own length.
-    """
-    Zt, Qn, V = wk.Zt, wk.Qn, wk.V
+def _null_basis(wk, k, ra, z0):
+    """The free basis below this level, ``(Z Q)^T`` with ``Q = H_0 ... H_(k-1)``: the reflections applied to the
+    ``ra`` directions the level sees (rows of ``wk.Zt`` from ``z0``) in place, first to last; rows from ``z0 + k`` on
+    then span the directions left free (``Z Q[:, k:]``, then those it does not see), rows ``z0 ... z0 + k - 1`` the
+    level's row space. Only the columns where those rows have nonzeros are turned."""
+    Zt = wk.Zt
     n = Zt.shape[1]
-    left = rz - k
-    for a in range(left):
-        for i in range(rz):
-            Qn[a, i] = 0.0
-        Qn[a, k + a] = 1.0
-    for j in range(k - 1, -1, -1):  # the rows are independent: reflection by reflection, not row by row
-        for a in range(left):
-            _axpy(Qn, a, -wk.beta[j] * _dot(V, j, Qn, a, j, rz), V, j, j, rz)
-    if identity:
-        for a in range(left):
-            for d in range(n):
-                Zt[a, d] = Qn[a, d]
-        return left
-    # Rows z0 ... of Zt are read while rows 0 ... are written: through V's spare rows k ... as a buffer.
-    for a in range(left):
-        for d in range(n):
-            V[k + a, d] = 0.0
-        for c in range(rz):
-            _axpy(V, k + a, Qn[a, c], Zt, z0 + c, 0, n)
-    for a in range(left):
-        for d in range(n):
-            Zt[a, d] = V[k + a, d]
-    return left
+    first, end = n, 0
+    for c in range(z0, z0 + ra):
+        for d in range(first):
+            if Zt[c, d] != 0.0:
+                first = d
+                break
+        for d in range(n - 1, end - 1, -1):
+            if Zt[c, d] != 0.0:
+                end = d + 1
+                break
+    for j in range(k):
+        reflect(Zt, z0, wk.V, j, wk.beta[j], j, ra, first, end, wk.zw)
 
 
 @njit(cache=True)
@@ -421,19 +437,23 @@ def _without_dof(Zt, z0, rz, dof, u, w):
     scale = 2.0 / uu
     w[:] = 0.0
     for c in range(rz):
-        _axpy1(w, u[c], Zt, z0 + c, 0, n)
+        if u[c] != 0.0:  # a zero adds exactly nothing
+            axpy1(w, u[c], Zt, z0 + c, 0, n)
     for c in range(rz):
-        a = -scale * u[c]
-        for d in range(n):
-            Zt[z0 + c, d] += a * w[d]
+        if u[c] != 0.0:
+            rank1(Zt, z0 + c, -scale * u[c], w, 0, n)
         Zt[z0 + c, dof] = 0.0  # exactly, not to rounding
     return scale
 
 
 @njit(cache=True)
-def _reflect_columns(A0, m, rz, u, scale):
-    """``A0 = (A0 (I - scale u u^T))[:, 1:]``: ``J Z`` after :func:`_without_dof` turned ``Z``, without the product."""
+def _reflect_rows(AT0, m, rz, u, scale, w):
+    """``AT0 = ((I - scale u u^T) AT0)[1:]``: ``(J Z)^T`` after :func:`_without_dof` turned ``Z``, without the
+    product. ``w``: (m,) scratch."""
     for i in range(m):
-        t = -scale * _dot1(A0, i, u, 0, rz)
-        for c in range(1, rz):
-            A0[i, c - 1] = A0[i, c] + t * u[c]
+        w[i] = 0.0
+    for c in range(rz):
+        axpy1(w, u[c], AT0, c, 0, m)
+    for c in range(1, rz):
+        for i in range(m):
+            AT0[c - 1, i] = AT0[c, i] - scale * u[c] * w[i]
