@@ -39,7 +39,7 @@ from gsik.balance import center_of_mass, com_jacobian, nearest_point_inside, shr
 from gsik.control_inputs import GROUND_TOLERANCE, Balance, ControlStats, FrameTask, Posture, frame_tasks, \
     structure, support  # noqa: F401  (gsik.control's names, as before the split)
 from gsik.control_inputs import _ordered, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
-from gsik.control_targets import ControlTargets, _same
+from gsik.control_targets import ControlReport, ControlTargets, _same  # noqa: F401  (ControlReport re-exported)
 from gsik.kernels import compiled_entry
 from gsik.kernels import accept as ak
 from gsik.kernels import control as ck

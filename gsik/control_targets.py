@@ -10,6 +10,9 @@ else evaluated (:func:`gsik.kernels.control.report_errors`).
 
 from __future__ import annotations
 
+import math
+from typing import NamedTuple
+
 import numpy as np
 
 from gsik.control_inputs import _ordered, row_weights
@@ -17,6 +20,24 @@ from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
 from gsik.kernels import gather
 from gsik.kernels import kinematics as kernels
+
+
+class ControlReport(NamedTuple):
+    """What :meth:`ControlTargets.report` reports.
+
+    Attributes:
+        names: Every effector, then the other targeted frames (k names).
+        values: One new array (n + 2k,): the angles (n,) [rad], then the k names' position [m] and orientation
+            [rad] errors.
+        finite: Every angle is finite (and the sum of their squares too): False after a step gone non-finite.
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    finite: bool
+
+
+_new_tuple = tuple.__new__  # a NamedTuple with every field given, without its __new__'s Python call
 
 
 class ControlTargets:
@@ -91,24 +112,23 @@ class ControlTargets:
         err[1, self._row_w[:, 3] <= 0.0] = 0.0
         return err[0], err[1]
 
-    def report(self, effector_names: tuple[str, ...], q, R, p, left: bool = False) \
-            -> tuple[tuple[str, ...], np.ndarray]:
-        """``(names, values)``: every effector (0 without a target), then the other targeted frames, and one new
-        array (n + 2k,) of the angles ``q`` (n,) [rad] and the k names' position [m] and orientation [rad] errors at
-        frames ``R``, ``p``. ``left``: this is the pose the last step left (the caller knows nothing moved it since),
-        so the errors that step evaluated there are reported as they are."""
+    def report(self, effector_names: tuple[str, ...], q, R, p, left: bool = False) -> ControlReport:
+        """The :class:`ControlReport` of every effector (0 without a target), then the other targeted frames, at
+        the angles ``q`` (n,) [rad] and frames ``R``, ``p``. ``left``: this is the pose the last step left (the
+        caller knows nothing moved it since), so the errors that step evaluated there are reported as they are."""
         if self._layout is None or self._layout[0] != effector_names:
             self._layout = self._report_layout(effector_names)
         _, names, index, used = self._layout
         n = len(q)
         values = np.empty(n + 2 * len(names))
         if left and self._errors_left:
-            self._call(gather.gather_result, q, self._work.err, used, values)
+            squares = self._call(gather.gather_result, q, self._work.err, used, values)
         else:
             values[:n] = q
+            squares = q.dot(q)
             self._call(ck.report_errors, R, p, self._tasks_in, index, self._e, self._err, self._M,
                        values[n:].reshape(2, -1))
-        return names, values
+        return _new_tuple(ControlReport, (names, values, math.isfinite(squares)))
 
     def _report_layout(self, effector_names: tuple[str, ...]) -> tuple:
         """``(effector_names, result names, task of each (k,) or -1, task of each error (2, k) or -1 where the

@@ -271,8 +271,8 @@ class Solver(TargetSetting, AttemptPolicy):
         if self._is_controlled:
             self._q_before[:] = self._q
             try:
-                result = self._control_step()
-                if math.isfinite(result.q @ result.q):
+                result, finite = self._control_step()
+                if finite:
                     return result
             except np.linalg.LinAlgError:  # its least squares met non-finite numbers
                 pass
@@ -443,10 +443,11 @@ class Solver(TargetSetting, AttemptPolicy):
             self._controller = self._last_controller = last
         return self._controller
 
-    def _control_step(self) -> SolveResult:
+    def _control_step(self) -> tuple[SolveResult, bool]:
         """Up to ``settings.tracking_steps`` prioritised steps (linearisations): another while the last was taken
         and left a target lagging (:data:`gsik.control.TRACKING_ERROR`), so a dragged target is met in its frame
-        as the single level's step meets it. ``step_norm``: the whole change of the angles [rad]."""
+        as the single level's step meets it. ``step_norm``: the whole change of the angles [rad]. Returns the
+        result and whether its angles are finite."""
         c = self._make_controller(rows=True)
         for iterations in range(1, self._settings.tracking_steps + 1):
             st = c.step(self._q, self._W, self._ws.R, self._ws.p, self._ws.lam)
@@ -458,14 +459,15 @@ class Solver(TargetSetting, AttemptPolicy):
         else:
             moved = self._q - self._q_before
             step_norm = math.sqrt(moved.dot(moved))
-        return self._control_result(status, iterations, st.cost, step_norm, 1, left=True)
+        report = c.report(self._topo.effector_names, self._q, self._ws.R, self._ws.p, True)
+        return self._control_result(status, iterations, st.cost, step_norm, 1, report), report.finite
 
     def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
-                        attempts: int, left: bool = False) -> SolveResult:
-        """A result naming every effector, then the other targeted frames, with their errors. ``left``: the pose
-        is the one the controller's last step left (its errors there are reported as that step found them)."""
-        c = self._controller or self._make_controller()
-        names, values = c.report(self._topo.effector_names, self._q, self._ws.R, self._ws.p, left)
+                        attempts: int, report: control.ControlReport | None = None) -> SolveResult:
+        """A result naming every effector, then the other targeted frames, with their errors: ``report`` (the
+        controller's, :class:`gsik.control.ControlReport`), or evaluated at the current pose."""
+        names, values, _ = report or (self._controller or self._make_controller()).report(
+            self._topo.effector_names, self._q, self._ws.R, self._ws.p)
         n, k = len(self._q), len(names)  # q and the errors share one buffer: three views the caller owns
         return _new_tuple(SolveResult, (values[:n], status, iterations, 0, residual, names, values[n:n + k],
                                         values[n + k:], step_norm, attempts))

@@ -79,7 +79,8 @@ def test_a_gathered_result_is_the_angles_then_the_used_rows_errors(n, k, data):
     index = np.array(data.draw(st.lists(st.integers(-1, m - 1), min_size=2 * k, max_size=2 * k)),
                      dtype=np.int64).reshape(2, k)
     out = np.full(n + 2 * k, 7.0)
-    gather.gather_result(q, err, index, out)
+    squares = gather.gather_result(q, err, index, out)
+    assert squares == sum(float(v) * float(v) for v in q)  # summed in order, as the kernel sums them
     want = np.concatenate([q] + [[err[a, i] if i >= 0 else 0.0 for i in index[a]] for a in range(2)])
     assert out.tobytes() == np.asarray(want, dtype=float).tobytes()
 
@@ -164,8 +165,9 @@ def _pinned() -> tuple:
 
 
 def _report(solver, left: bool) -> bytes:
-    names, values = solver._controller.report(solver.effector_names, solver._q, solver._ws.R, solver._ws.p, left)
-    return values.tobytes()
+    report = solver._controller.report(solver.effector_names, solver._q, solver._ws.R, solver._ws.p, left)
+    assert report.finite
+    return report.values.tobytes()
 
 
 def test_a_committed_steps_errors_are_reported_as_a_fresh_evaluation_finds_them():
@@ -186,7 +188,7 @@ def test_errors_left_are_not_reported_after_the_targets_or_the_pose_changed():
     q[0] += 0.01
     solver.set_q(q)  # from outside: the solver's result for this pose evaluates the errors again
     r = solver._control_result(gsik.Status.CONVERGED, 1, 0.0, 0.0, 1)
-    names, values = c.report(solver.effector_names, solver._q, solver._ws.R, solver._ws.p)
+    names, values, _ = c.report(solver.effector_names, solver._q, solver._ws.R, solver._ws.p)
     assert np.concatenate([r.q, r.position_errors, r.orientation_errors]).tobytes() == values.tobytes()
     assert r.position_errors.tobytes() != np.frombuffer(stale)[len(q):len(q) + len(names)].tobytes()
 
@@ -250,3 +252,21 @@ def test_without_step_inputs_a_drag_steps_the_same(monkeypatch):
     for a, b in zip(with_inputs, without):
         assert a.q.tobytes() == b.q.tobytes() and a.position_errors.tobytes() == b.position_errors.tobytes()
         assert (a.status, a.step_norm) == (b.status, b.step_norm)
+
+
+@pytest.mark.parametrize("left", [True, False])
+def test_a_controlled_step_that_leaves_a_non_finite_angle_is_refused_and_undone(monkeypatch, left):
+    """The report says whether the angles are finite (gathered with the errors the step left, or not): a step that
+    went non-finite is undone, the pose the last finite one."""
+    solver, c, targets = _pinned()
+    before = solver.q
+
+    def poisoned(self, q, W, R, p, lam):
+        q[3] = math.nan
+        self._errors_left = left
+        return gsik.control.ControlStats(True, False, True, 0.0, 0.0)
+
+    monkeypatch.setattr(gsik.control.Controller, "step", poisoned)
+    r = solver.step()
+    assert r.status is gsik.Status.REFUSED and r.q.tobytes() == before.tobytes() == solver.q.tobytes()
+    assert not c.report(solver.effector_names, np.full(len(before), math.inf), solver._ws.R, solver._ws.p).finite

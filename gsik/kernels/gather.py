@@ -65,11 +65,16 @@ def gather_targets(position, rotation, row_weight, index, tp, tR, row_w, flags, 
 def gather_result(q, err, index, out):
     """A result's angles and errors into ``out`` (n + 2k,): ``q`` (n,) [rad], then the position [m] and the
     orientation [rad] errors of ``k`` frames from the tasks' errors ``err`` (2, m): ``err[a, index[a, j]]``, 0
-    where ``index[a, j]`` is -1 (no target, or a row the task does not use)."""
+    where ``index[a, j]`` is -1 (no target, or a row the task does not use). Returns ``sum(q ** 2)`` [rad^2]
+    (summed in order): finite exactly when every angle is and their squares do not overflow, the solver's test of a
+    step gone non-finite, without a NumPy call of its own."""
     n, k = q.shape[0], index.shape[1]
+    squares = 0.0
     for d in range(n):
         out[d] = q[d]
+        squares += q[d] * q[d]
     for a in range(2):
         for j in range(k):
             i = index[a, j]
             out[n + a * k + j] = err[a, i] if i >= 0 else 0.0
+    return squares
