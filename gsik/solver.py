@@ -125,6 +125,7 @@ class Solver(TargetSetting, AttemptPolicy):
         self._model = kinematic_model(self._skeleton, self._topo)
         sk = self._skeleton
         self._target_frames = frozenset(sk.target_names)  # once, not per target set: set_targets runs per frame
+        self._valid_names = (self._target_frames | set(self._topo.effector_names)) - {root}  # what a target may aim
         m = len(self._topo.effector_names)
         # Targets, root transform, angles and workspace are views of one buffer the step kernel takes whole
         # (gsik.kernels.buffers); q and the errors lead it, so a result copies them at once.
@@ -149,13 +150,15 @@ class Solver(TargetSetting, AttemptPolicy):
     def _refresh_frames(self) -> None:
         self._fk(self._model, self._q, self._topo.root_frame, self._W, self._ws.R, self._ws.p)
 
-    def _pack_targets(self) -> None:
+    def _pack_targets(self, layout: tuple | None = None) -> None:
         """The targets into the kernels' rows. When only their positions and orientations changed since the last
-        packing (a drag's every frame: same names, weights, position-only flags and priorities), only those are
-        written; the rows without a target keep what the last full packing put there (weight 0: unused)."""
+        packing (a drag's every frame: same names, weights, position-only flags and priorities, ``layout`` if
+        given), only those are written; the rows without a target keep what the last full packing put there
+        (weight 0: unused)."""
         self._controller = None
         self._fast_rows = None  # move_target's rows: made again at its next call
-        layout = tuple([(name, t.weight, t.position_only, t.priority) for name, t in self._targets.items()])
+        if layout is None:
+            layout = tuple([(name, t.weight, t.position_only, t.priority) for name, t in self._targets.items()])
         if layout == self._layout:
             self._write_target_rows()
             self._is_controlled = self._posture is not None or self._balance or self._layout_controlled

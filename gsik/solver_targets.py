@@ -70,13 +70,13 @@ class TargetSetting:
                 (the root cannot have a target) or a value that is not a
                 :class:`Target`. Nothing changes when it raises.
         """
-        checked = self._check_targets(targets)
+        checked, layout = self._check_targets(targets)
         self._targets = checked
-        self._pack_targets()
+        self._pack_targets(layout)
 
     def set_target(self, name: str, target: Target | None) -> None:
         """Set or (with ``None``) remove one effector's target."""
-        checked = self._check_targets({name: target})
+        checked = self._check_targets({name: target})[0]
         _check_target_counts({**{n: t for n, t in self._targets.items() if n != name}, **checked})
         self._targets.pop(name, None)
         self._targets.update(checked)
@@ -119,16 +119,27 @@ class TargetSetting:
     def _write_target_rows(self) -> None:
         """Each target's position and rotation into its effector's row. A :class:`Target`'s position (3,) and
         rotation (3, 3) are float64 in C order: their bytes go straight into the rows' bytes (a quarter of NumPy's
-        item assignment)."""
-        if self._row_bytes is None:  # made once per buffer: the float buffer's bytes, where the rows begin
-            self._row_bytes = (memoryview(self._buffers.floats).cast("B"),
-                               *(8 * i for i in target_rows_at(self._buffers.sizes)))
-        rows, p0, R0 = self._row_bytes
-        for name, t in self._targets.items():
+        item assignment), at the places :meth:`_row_places` found for this layout."""
+        cached = self._row_bytes
+        if cached is None or cached[0] is not self._layout:
+            cached = self._row_bytes = (self._layout, *self._row_places())
+        _, rows, places = cached
+        for t, (at_p, at_R) in zip(self._targets.values(), places):
+            if at_p is not None:
+                rows[at_p] = t.position.tobytes()
+                rows[at_R] = t.rotation.tobytes()
+
+    def _row_places(self) -> tuple:
+        """``(float buffer's bytes, (position's, rotation's byte slice) of each target in order)``, both ``None``
+        for a target off the effectors: made again when the targets' layout or the buffers change."""
+        rows = memoryview(self._buffers.floats).cast("B")
+        p0, R0 = (8 * i for i in target_rows_at(self._buffers.sizes))
+        places = []
+        for name in self._targets:
             k = self._row_of.get(name)
-            if k is not None:
-                rows[p0 + 24 * k:p0 + 24 * k + 24] = t.position.tobytes()
-                rows[R0 + 72 * k:R0 + 72 * k + 72] = t.rotation.tobytes()
+            places.append((None, None) if k is None else (slice(p0 + 24 * k, p0 + 24 * k + 24),
+                                                          slice(R0 + 72 * k, R0 + 72 * k + 72)))
+        return rows, places
 
     def _make_fast_rows(self) -> dict:
         """``{target name: (compiled move_row_at, float buffer, position's index, rotation's index)}`` of the targets
@@ -171,20 +182,25 @@ class TargetSetting:
         self._move_row = kernels.compiled_entry(move_row_at, _ANY_VECTOR, _ANY_MATRIX, self._buffers.floats, 0, 0)
         return self._move_row
 
-    def _check_targets(self, targets: Mapping[str, Target | None]) -> dict[str, Target]:
+    def _check_targets(self, targets: Mapping[str, Target | None]) -> tuple[dict[str, Target], tuple]:
+        """``(the enabled targets, their layout)``: the layout ``((name, weight, position_only, priority), ...)``
+        in order, what :meth:`_pack_targets` compares to know that only the values moved."""
         if type(targets) is not dict and not isinstance(targets, Mapping):
             raise TargetError(f"targets must be a mapping of effector name to Target, got {type(targets).__name__}")
-        out = {}
+        out, layout, valid = {}, [], self._valid_names
         for name, t in targets.items():
-            self._check_target_name(name)
+            if name not in valid:
+                self._check_target_name(name)
             if t is None:
                 continue
-            if not isinstance(t, Target):
+            if type(t) is not Target and not isinstance(t, Target):
                 raise TargetError(f"target for {name!r} must be a gsik.Target, got {type(t).__name__}")
             if t.enabled:  # a disabled target leaves its effector free, as no target does
                 out[name] = t
-        _check_target_counts(out)
-        return out
+                layout.append((name, t.weight, t.position_only, t.priority))
+        if len(out) > MAX_PRIORITY_LEVELS:  # fewer targets cannot make too many levels
+            _check_target_counts(out)
+        return out, tuple(layout)
 
     def _check_target_name(self, name) -> None:
         """Raise :class:`TargetError` unless ``name`` is an effector, or a joint or site other than the root."""

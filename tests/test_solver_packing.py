@@ -71,3 +71,22 @@ def test_configure_repacks_the_orientation_weight(biped):
                             **MEMORYLESS)
     a, b = solver.step(targets), reference.step(targets)
     assert np.array_equal(a.q, b.q)
+
+
+def test_repeated_layouts_write_each_target_into_its_own_row(biped):
+    """Frames of one layout write only the values, at the rows found for that layout: with a target off the
+    effectors (no row) between two that have one, and after the same targets come in another order (another
+    layout), the packed rows are a fresh solver's, bit for bit."""
+    solver = gsik.Solver(biped)
+    poses = solver.effector_poses()
+    elbow = solver.world_positions()[biped.frame_of("left_elbow")]
+    for f, T in enumerate(_drag(solver, 6)):
+        targets = {"left_hand": Target.from_transform(T), "left_elbow": Target(elbow + 0.001 * f, priority=1),
+                   "right_hand": Target(poses["right_hand"][:3, 3] - 0.001 * f)}
+        if f >= 3:
+            targets = dict(reversed(targets.items()))
+        solver.set_targets(targets)
+        fresh = gsik.Solver(biped)
+        fresh.set_targets(targets)
+        assert all(a.tobytes() == b.tobytes() for a, b in zip(solver._packed, fresh._packed))
+        assert solver._packed.position[fresh._row_of["left_hand"]].tolist() == T[:3, 3].tolist()
