@@ -30,8 +30,6 @@ keeps the rarer branches. Its inputs live in :mod:`gsik.control_inputs`, its ret
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
@@ -306,8 +304,7 @@ class Controller(ControlTargets):
         tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first, judged)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
-            dq = q2 - q
-            step_norm = math.sqrt(float(dq @ dq))
+            step_norm = self._call(step_inputs.norm, q2 - q)  # the compiled call's sum, bit for bit
             q[:], R[:], p[:] = q2, R2, p2
             state = anchored(state, state0, decided if verdict == BETTER else 0)
             ak.store(self._cache, q, W, state)
@@ -349,16 +346,16 @@ class Controller(ControlTargets):
         """What :func:`gsik.kernels.step_inputs.control_step` returns, read from the cache (the call without it)."""
         out, flags = self._cache.out.tolist(), self._cache.flags.tolist()
         return (out[ak.R_STATUS], out[ak.R_COMMITTED], out[ak.R_CREEPS], flags[ak.F_CONVERGED],
-                flags[ak.F_TARGET_COST], flags[ak.F_LAGGING])
+                flags[ak.F_TARGET_COST], flags[ak.F_LAGGING], step_inputs.norm(self._cache.moved))
 
     def _committed(self, end: tuple) -> ControlStats:
         """The :class:`ControlStats` of a step :func:`~gsik.kernels.accept.control_step` committed (``end``: what
         :func:`gsik.kernels.step_inputs.control_step` returns), as :func:`~gsik.kernels.accept.committed_stats` makes
-        them: held when the step's norm (NumPy's sum, as a step of the Python branches) is at most the stall
-        tolerance or the stall window says it creeps (asked here when the kernel left it to that norm)."""
+        them: held when the step's norm (:func:`gsik.kernels.step_inputs.norm`, as a step of the Python branches)
+        is at most the stall tolerance or the stall window says it creeps (asked here when the kernel left it to
+        that norm)."""
         cache, tolerance = self._cache, self._settings.stall_tolerance
-        step_norm = math.sqrt(cache.moved.dot(cache.moved))  # ndarray.dot: the same BLAS sum as @, for less
-        _, _, crept, converged, target_cost, lagging = end
+        _, _, crept, converged, target_cost, lagging, step_norm = end
         if crept < 0.0:
             crept = not step_norm <= tolerance and self._call(ak.creeps, self._window, cache.met,
                                                               self._posture is not None, cache.costs)

@@ -23,6 +23,7 @@ from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM
 from gsik.kernels import solve as solve_kernels  # noqa: F401  (gsik.solver.solve_kernels, as before)
 from gsik.kernels import buffers as kernel_buffers
 from gsik.kernels import step as step_kernels
+from gsik.kernels import step_inputs
 from gsik.kernels.kinematics import forward_kinematics
 from gsik.kinematics import Topology, kinematic_model, topology
 from gsik.result import (_STATUSES, SolveResult, Status, errors_by_effector, max_orientation_error,  # noqa: F401
@@ -460,8 +461,7 @@ class Solver(TargetSetting, AttemptPolicy):
         if iterations == 1:  # the one step's own norm: the same difference and sum (0 when it did not move)
             step_norm = st.step_norm
         else:
-            moved = self._q - self._q_before
-            step_norm = math.sqrt(moved.dot(moved))
+            step_norm = step_inputs.norm(self._q - self._q_before)  # one sum for every controlled step's norm
         report = c.report(self._topo.effector_names, self._q, self._ws.R, self._ws.p, True)
         return self._control_result(status, iterations, st.cost, step_norm, 1, report), report.finite
 
