@@ -36,6 +36,8 @@ class AttemptPolicy:
     #: ``(controller, angles' bytes, posture gain)``: where the last prioritised attempt with a posture ended, and
     #: the share of the posture's step it had learnt (:class:`~gsik.stall.PostureSettle`).
     _posture_gain: tuple = (None, b"", 1.0)
+    #: The last prioritised attempt ended with a step (the pose is the one it left), not a return to a pose.
+    _stepped: bool = False
 
     def solve(self, targets: Mapping[str, Target | None] | None = None, q0=None) -> SolveResult:
         """Solve to convergence (or best reach) from ``q0`` (default: the current angles).
@@ -73,6 +75,7 @@ class AttemptPolicy:
         self._make_moved_targets()  # before a continuation stages other values in the packed rows
         if self._is_controlled and not self._balance:
             self._make_controller(rows=True)  # the rows hold the targets' values now: gathered, as a step's
+        self._stepped = False
         if self._settled is not None and self._settled[0] == self._reach_key():
             return self._solve_result(self._settled[1], 1)  # nothing further can do better: no work
         stats, attempts = self._attempts()
@@ -85,9 +88,9 @@ class AttemptPolicy:
 
     def _solve_result(self, stats: np.ndarray, attempts: int) -> SolveResult:
         """The result of a solve whose best attempt's statistics are ``stats``."""
-        if self._is_controlled:
-            return self._control_result(_status(stats), int(stats[O_ITERATIONS]),
-                                        float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
+        if self._is_controlled:  # left: the pose is where the last attempt's last step left it (its errors hold)
+            return self._control_result(_status(stats), int(stats[O_ITERATIONS]), float(stats[O_COST]),
+                                        float(stats[O_STEP_NORM]), attempts, left=self._stepped)
         return self._result(stats, O_COST, attempts)
 
     def _attempts(self) -> tuple[np.ndarray, int]:
@@ -304,6 +307,7 @@ class AttemptPolicy:
         self._refresh_frames()
         first, converged = self._control_positions_first(c, iterations)
         st, it = self._control_steps(c, iterations - first, converged)
+        self._stepped = st is not None  # nothing moves the pose after this attempt's last step (see _solve_result)
         it += first
         stats = np.zeros(kernels.N_STATS)
         stats[O_STATUS] = self._control_status(c, st)
@@ -321,10 +325,10 @@ class AttemptPolicy:
         are the ones :meth:`~gsik.control.Controller.converged` reads, so the posture's settle test reuses them."""
         if not (self._stages_positions() and iterations):
             return 0, None
-        pos, ori = c.errors(self._ws.R, self._ws.p)
-        if ori.max(initial=0.0) <= solve_kernels.STAGE_ANGLE:
+        pos, ori = (e.tolist() for e in c.errors(self._ws.R, self._ws.p))  # a few tasks: plain floats are cheaper
+        if all(e <= solve_kernels.STAGE_ANGLE for e in ori):  # as ori.max() <= STAGE_ANGLE, a NaN included
             s = self._settings  # Controller.converged's test, on these errors
-            return 0, bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
+            return 0, all(e <= s.position_tolerance for e in pos) and all(e <= s.orientation_tolerance for e in ori)
         tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)
         c.retarget([t._replace(row_weight=t.row_weight * _POSITION_ROWS) for t in tasks])
         try:
