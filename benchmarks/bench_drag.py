@@ -6,7 +6,8 @@ then dragged position-only round a 0.1 m circle (one turn per 100 frames) for ``
 
 - ``step``: one ``Solver.step()`` a frame: median µs, frames with both hands within 1 mm, frames with both pins
   within 0.1 mm;
-- ``solve``: one ``Solver.solve()`` a frame, warm from the last frame: median ms and linearisations; where the
+- ``solve``: one ``Solver.solve()`` a frame, warm from the last frame: median ms, linearisations and µs per
+  linearisation (each frame's time over its linearisations; beside the step's µs a frame); where the
   settings have ``posture_tolerance``, the quality of its settle test against a drag solved with it off (0: a solve
   goes on until a step gains under ``settle_tolerance``): the largest joint-angle difference [rad] and effector
   difference [mm] over every frame and joint, and the range of the posture's cost ratio (frames whose posture cost
@@ -88,7 +89,9 @@ def _drag(posture: str | None, hand_priority: int, frames: int, solve: bool, **s
         poses_q.append(r.q)
         points.append(solver.world_positions())
         costs.append(_posture_cost(solver))
+    per_linearisation = [t / i for t, i in zip(times, iterations) if i > 0]
     return {"us": 1e6 * float(np.median(times)), "hands": hands, "pins": pins,
+            "us_per_linearisation": 1e6 * float(np.median(per_linearisation)) if per_linearisation else 0.0,
             "iterations": float(np.median(iterations)), "q": np.array(poses_q), "points": np.array(points),
             "cost": np.array(costs)}
 
@@ -133,15 +136,22 @@ def run(frames: int) -> dict:
 def _print(rows: dict, frames: int) -> None:
     print(f"load {os.getloadavg()[0]:.1f}; {frames} frames\n")
     print("| code | path | step µs (x plain) | hands within 1 mm | pins within 0.1 mm | warm solve() ms (x plain) "
-          "| linearisations | vs posture_tolerance 0: max rad, mm, cost ratio |")
-    print("|---|---|---|---|---|---|---|---|")
+          "| linearisations | solve µs per linearisation (x step) | vs posture_tolerance 0: max rad, mm, cost ratio |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for code, row in rows.items():
         plain = row["plain"]
         for name, r in row.items():
             s, v = r["step"], r["solve"]
             print(f"| {code} | {name} | {s['us']:.0f} ({s['us'] / plain['step']['us']:.1f}x) | {s['hands']}/{frames} "
                   f"| {s['pins']}/{frames} | {v['us'] / 1e3:.2f} ({v['us'] / plain['solve']['us']:.1f}x) "
-                  f"| {v['iterations']:.0f} | {_quality(v)} |")
+                  f"| {v['iterations']:.0f} | {_per_linearisation(v, s)} | {_quality(v)} |")
+
+
+def _per_linearisation(v: dict, s: dict) -> str:
+    """The solve drag's median µs per linearisation (each frame's time over its linearisations) and its ratio to
+    the step drag's µs a frame: ``-`` for a checkout whose figures lack it."""
+    us = v.get("us_per_linearisation")
+    return "-" if us is None else f"{us:.0f} ({us / s['us']:.1f}x)"
 
 
 def _quality(v: dict) -> str:

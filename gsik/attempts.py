@@ -36,6 +36,8 @@ class AttemptPolicy:
     #: ``(controller, angles' bytes, posture gain)``: where the last prioritised attempt with a posture ended, and
     #: the share of the posture's step it had learnt (:class:`~gsik.stall.PostureSettle`).
     _posture_gain: tuple = (None, b"", 1.0)
+    #: The last prioritised attempt ended with a step (the pose is the one it left), not a return to a pose.
+    _stepped: bool = False
 
     def solve(self, targets: Mapping[str, Target | None] | None = None, q0=None) -> SolveResult:
         """Solve to convergence (or best reach) from ``q0`` (default: the current angles).
@@ -71,6 +73,9 @@ class AttemptPolicy:
         if q0 is not None:
             self.set_q(q0)
         self._make_moved_targets()  # before a continuation stages other values in the packed rows
+        if self._is_controlled and not self._balance:
+            self._make_controller(rows=True)  # the rows hold the targets' values now: gathered, as a step's
+        self._stepped = False
         if self._settled is not None and self._settled[0] == self._reach_key():
             return self._solve_result(self._settled[1], 1)  # nothing further can do better: no work
         stats, attempts = self._attempts()
@@ -83,9 +88,11 @@ class AttemptPolicy:
 
     def _solve_result(self, stats: np.ndarray, attempts: int) -> SolveResult:
         """The result of a solve whose best attempt's statistics are ``stats``."""
-        if self._is_controlled:
-            return self._control_result(_status(stats), int(stats[O_ITERATIONS]),
-                                        float(stats[O_COST]), float(stats[O_STEP_NORM]), attempts)
+        if self._is_controlled:  # _stepped: the pose is where the last attempt's last step left it (its errors hold)
+            report = (self._controller or self._make_controller()).report(
+                self._topo.effector_names, self._q, self._ws.R, self._ws.p, self._stepped)
+            return self._control_result(_status(stats), int(stats[O_ITERATIONS]), float(stats[O_COST]),
+                                        float(stats[O_STEP_NORM]), attempts, report)
         return self._result(stats, O_COST, attempts)
 
     def _attempts(self) -> tuple[np.ndarray, int]:
@@ -300,8 +307,9 @@ class AttemptPolicy:
         c = self._make_controller()
         self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
         self._refresh_frames()
-        first = self._control_positions_first(c, iterations)
-        st, it = self._control_steps(c, iterations - first)
+        first, converged = self._control_positions_first(c, iterations)
+        st, it = self._control_steps(c, iterations - first, converged)
+        self._stepped = st is not None  # nothing moves the pose after this attempt's last step (see _solve_result)
         it += first
         stats = np.zeros(kernels.N_STATS)
         stats[O_STATUS] = self._control_status(c, st)
@@ -310,26 +318,32 @@ class AttemptPolicy:
         stats[O_STEP_NORM] = 0.0 if st is None else st.step_norm
         return stats
 
-    def _control_positions_first(self, c, iterations: int) -> int:
+    def _control_positions_first(self, c, iterations: int) -> tuple[int, bool | None]:
         """With ``positions_first`` and an orientation target off by more than
         :data:`~gsik.kernels.solve.STAGE_ANGLE`, prioritised steps on the positions alone (every level's
         orientation rows off), as a plain attempt's first phase, for at most
-        :data:`~gsik.kernels.solve.POSITION_PHASE_SHARE` of ``iterations``; returns the steps made."""
-        if not (self._stages_positions() and iterations) or \
-                c.errors(self._ws.R, self._ws.p)[1].max(initial=0.0) <= solve_kernels.STAGE_ANGLE:
-            return 0
+        :data:`~gsik.kernels.solve.POSITION_PHASE_SHARE` of ``iterations``. Returns ``(steps made, every target
+        within its tolerances at the start pose, or None if not read)``: without that phase the errors read here
+        are the ones :meth:`~gsik.control.Controller.converged` reads, so the posture's settle test reuses them."""
+        if not (self._stages_positions() and iterations):
+            return 0, None
+        pos, ori = (e.tolist() for e in c.errors(self._ws.R, self._ws.p))  # a few tasks: plain floats are cheaper
+        if all(e <= solve_kernels.STAGE_ANGLE for e in ori):  # as ori.max() <= STAGE_ANGLE, a NaN included
+            s = self._settings  # Controller.converged's test, on these errors
+            return 0, all(e <= s.position_tolerance for e in pos) and all(e <= s.orientation_tolerance for e in ori)
         tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)
         c.retarget([t._replace(row_weight=t.row_weight * _POSITION_ROWS) for t in tasks])
         try:
-            return self._control_steps(c, math.ceil(solve_kernels.POSITION_PHASE_SHARE * iterations))[1]
+            return self._control_steps(c, math.ceil(solve_kernels.POSITION_PHASE_SHARE * iterations))[1], None
         finally:
             c.retarget(tasks)
 
-    def _control_steps(self, c, iterations: int) -> tuple:
-        """``(last step's ControlStats or None, steps made)``: at most ``iterations`` prioritised steps."""
+    def _control_steps(self, c, iterations: int, converged: bool | None = None) -> tuple:
+        """``(last step's ControlStats or None, steps made)``: at most ``iterations`` prioritised steps;
+        ``converged``: every target is within its tolerances at the start pose (None: not known yet)."""
         lam = np.array([self._settings.damping])
         settles = self._posture is not None or self._balance  # keep going after convergence until they hold
-        posture = self._posture_settle(c)
+        posture = self._posture_settle(c, converged)
         st = None
         it = 0
         try:
@@ -347,20 +361,27 @@ class AttemptPolicy:
                 c.posture_gain[0] = 1.0
         return st, it
 
-    def _posture_settle(self, c) -> PostureSettle | None:
+    def _posture_settle(self, c, converged: bool | None = None) -> PostureSettle | None:
         """The posture's step share and settle test for an attempt's steps (:class:`~gsik.stall.PostureSettle`;
         the share the last attempt with this controller learnt if this one starts where it ended, as a drag's warm
         solve does: the curvature it measured is that of this pose), or ``None`` without a posture, with balance (its
-        level's state is not the targets'), or at ``posture_tolerance`` 0."""
+        level's state is not the targets'), or at ``posture_tolerance`` 0. ``converged``: the targets' state at the
+        start pose if known (:meth:`_control_positions_first` read it)."""
         if self._posture is None or self._balance or self._settings.posture_tolerance <= 0.0:
             return None
         learnt = self._posture_gain
         c.posture_gain[0] = learnt[2] if learnt[0] is c and learnt[1] == self._q.tobytes() else 1.0
-        return PostureSettle(self._settings.posture_tolerance, c.converged(self._ws.R, self._ws.p), c.posture_gain)
+        if converged is None:
+            converged = c.converged(self._ws.R, self._ws.p)
+        return PostureSettle(self._settings.posture_tolerance, converged, c.posture_gain)
 
     def _control_status(self, c, st) -> Status:
-        """How a prioritised attempt ended, given its last step ``st`` (None if it made none)."""
-        if c.converged(self._ws.R, self._ws.p):
+        """How a prioritised attempt ended, given its last step ``st`` (None if it made none). The last step's
+        ``converged`` is the targets' state at the pose it left (taken or refused), by the tolerances
+        :meth:`~gsik.control.Controller.converged` tests; without a step, or with a non-finite cost (a NaN error
+        the kernel and that test would read differently), they are tested here."""
+        known = st is not None and math.isfinite(st.cost)
+        if st.converged if known else c.converged(self._ws.R, self._ws.p):
             return Status.CONVERGED
         return Status.STALLED if st is not None and st.held else Status.BUDGET_EXHAUSTED
 
