@@ -118,8 +118,8 @@ def _package_digest_of(py_func, py_file: str) -> str | None:
     package = sys.modules.get(py_func.__module__.partition(".")[0])
     if getattr(package, "__path__", None) is None or not getattr(package, "__file__", None):
         return None
-    root = os.path.dirname(os.path.realpath(package.__file__))
-    if not os.path.realpath(py_file).startswith(root + os.sep):
+    root = os.path.dirname(os.path.abspath(package.__file__))
+    if not os.path.abspath(py_file).startswith(root + os.sep):
         return None
     return package_sources_digest(root)
 
