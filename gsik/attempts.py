@@ -89,10 +89,8 @@ class AttemptPolicy:
     def _solve_result(self, stats: np.ndarray, attempts: int) -> SolveResult:
         """The result of a solve whose best attempt's statistics are ``stats``."""
         if self._is_controlled:  # _stepped: the pose is where the last attempt's last step left it (its errors hold)
-            report = (self._controller or self._make_controller()).report(
-                self._topo.effector_names, self._q, self._ws.R, self._ws.p, self._stepped)
             return self._control_result(_status(stats), int(stats[O_ITERATIONS]), float(stats[O_COST]),
-                                        float(stats[O_STEP_NORM]), attempts, report)
+                                        float(stats[O_STEP_NORM]), attempts, self._control_report(self._stepped))
         return self._result(stats, O_COST, attempts)
 
     def _attempts(self) -> tuple[np.ndarray, int]:
@@ -329,8 +327,7 @@ class AttemptPolicy:
             return 0, None
         pos, ori = (e.tolist() for e in c.errors(self._ws.R, self._ws.p))  # a few tasks: plain floats are cheaper
         if all(e <= solve_kernels.STAGE_ANGLE for e in ori):  # as ori.max() <= STAGE_ANGLE, a NaN included
-            s = self._settings  # Controller.converged's test, on these errors
-            return 0, all(e <= s.position_tolerance for e in pos) and all(e <= s.orientation_tolerance for e in ori)
+            return 0, c.within_tolerances(pos, ori)  # Controller.converged's test, on these errors
         tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)
         c.retarget([t._replace(row_weight=t.row_weight * _POSITION_ROWS) for t in tasks])
         try:

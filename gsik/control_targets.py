@@ -81,8 +81,8 @@ class ControlTargets:
                           self._tp, self._tR, self._row_w, self._cache.flags, self._window.ring)
         if code == gather.DECLINED:
             return False
-        if code == gather.MOVED:  # the kernel dropped the cached levels and the stall window; the rest of _moved
-            self._held, self._errors_left, self._rest_damping = None, False, self._last_held
+        if code == gather.MOVED:  # the kernel dropped the cached levels and the stall window; the rest here
+            self._moved()
         return True
 
     def _retarget(self, tp: np.ndarray, tR: np.ndarray, row_w: np.ndarray) -> None:
@@ -152,8 +152,13 @@ class ControlTargets:
     def converged(self, R, p) -> bool:
         """True if every target is within the position and orientation tolerances."""
         pos, ori = self.errors(R, p)
+        return self.within_tolerances(pos.tolist(), ori.tolist())
+
+    def within_tolerances(self, pos: list[float], ori: list[float]) -> bool:
+        """True if every position error [m] in ``pos`` and orientation error [rad] in ``ori`` is within the
+        settings' tolerances (a NaN is not)."""
         s = self._settings
-        return bool(np.all(pos <= s.position_tolerance) and np.all(ori <= s.orientation_tolerance))
+        return all(e <= s.position_tolerance for e in pos) and all(e <= s.orientation_tolerance for e in ori)
 
 
 def _same(a: np.ndarray, b: np.ndarray | None) -> bool:

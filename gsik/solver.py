@@ -462,18 +462,22 @@ class Solver(TargetSetting, AttemptPolicy):
             step_norm = st.step_norm
         else:
             step_norm = step_inputs.norm(self._q - self._q_before)  # one sum for every controlled step's norm
-        report = c.report(self._topo.effector_names, self._q, self._ws.R, self._ws.p, True)
+        report = self._control_report(left=True)
         return self._control_result(status, iterations, st.cost, step_norm, 1, report), report.finite
 
     def _control_result(self, status: Status, iterations: int, residual: float, step_norm: float,
                         attempts: int, report: control.ControlReport | None = None) -> SolveResult:
         """A result naming every effector, then the other targeted frames, with their errors: ``report`` (the
         controller's, :class:`gsik.control.ControlReport`), or evaluated at the current pose."""
-        names, values, _ = report or (self._controller or self._make_controller()).report(
-            self._topo.effector_names, self._q, self._ws.R, self._ws.p)
+        names, values, _ = report or self._control_report()
         n, k = len(self._q), len(names)  # q and the errors share one buffer: three views the caller owns
         return _new_tuple(SolveResult, (values[:n], status, iterations, 0, residual, names, values[n:n + k],
                                         values[n + k:], step_norm, attempts))
+
+    def _control_report(self, left: bool = False) -> control.ControlReport:
+        """The controller's report at the current pose (``left``: the pose its last step left, errors as it found)."""
+        return (self._controller or self._make_controller()).report(self._topo.effector_names, self._q, self._ws.R,
+                                                                   self._ws.p, left)
 
 
 def _posture_precision(weights, n: int) -> np.ndarray:
