@@ -22,9 +22,9 @@ at the largest damping, or ends a run of steps that only creep
 and holding is remembered, so a held target settles at its best reach instead
 of jittering, and a held step costs nothing.
 
-The common step (no balance, the full step's trial better at once) is one compiled call (:mod:`gsik.kernels.accept`
-over :mod:`gsik.kernels.control`, its fixed inputs held by one :mod:`gsik.kernels.step_inputs` object); this module
-keeps the rarer branches. Its inputs live in :mod:`gsik.control_inputs`, its retargeting and reports in
+A step without balance is one compiled call (:mod:`gsik.kernels.fallback` over :mod:`gsik.kernels.accept` and
+:mod:`gsik.kernels.control`, its fixed inputs held by one :mod:`gsik.kernels.step_inputs` object); this module keeps
+the same branches in Python, balance's path and the compiled call's reference. Its inputs live in :mod:`gsik.control_inputs`, its retargeting and reports in
 :mod:`gsik.control_targets`.
 """
 
@@ -41,6 +41,8 @@ from gsik.control_targets import ControlReport, ControlTargets, _same  # noqa: F
 from gsik.kernels import compiled_entry
 from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
+from gsik.kernels import fallback
+from gsik.kernels.fallback import DAMPING_RAISE, MAX_DAMPING  # noqa: F401  (MAX_DAMPING: gsik.control's name)
 from gsik.kernels import kinematics as kernels
 from gsik.kernels import priority as priority_kernel
 from gsik.kernels import step_inputs
@@ -58,8 +60,6 @@ _new_tuple = tuple.__new__  # a NamedTuple with every field given, without its _
 TRACKING_ERROR = 10.0
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
-#: Largest adaptive damping (the fast path's too): a step refused at it holds the pose.
-MAX_DAMPING = 1e6
 #: While steps succeed the adaptive damping falls to this fraction of ``settings.damping`` (the fast path's floor is
 #: 0.1): near a fold of a target's reach (a straight spine raising the head, a straight leg) the smallest singular
 #: value of a level seen in what the levels above leave it is ~3e-3, and a step closes only ``s^2 / (s^2 + lam)`` of
@@ -97,7 +97,7 @@ class Controller(ControlTargets):
 
     #: False: every step through the Python branches (the reference the compiled common path is tested against).
     compiled_step = True
-    #: The last step's full step when the Python branches judged it, ``None`` when the compiled call committed it.
+    #: The last step's full step when the Python branches judged it, ``None`` when the compiled call made the step.
     _first: np.ndarray | None = None
 
     def __init__(self, skeleton, tasks, posture: Posture | None, balance: Balance | None, settings):
@@ -269,9 +269,9 @@ class Controller(ControlTargets):
     def step(self, q: np.ndarray, W: np.ndarray, R: np.ndarray, p: np.ndarray, lam: np.ndarray) -> ControlStats:
         """One prioritised step from ``q`` (n_dofs,) [rad], in place on ``q``, ``R``, ``p`` and ``lam`` (1,).
 
-        ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4). Without balance, the start
-        state, the step, its trial and a better trial's commit are one compiled call
-        (:func:`gsik.kernels.accept.control_step`)."""
+        ``R``, ``p`` hold the world frames at ``q`` with the root pinned at ``W`` (4, 4). Without balance the whole
+        step, a refused full step's fallback too, is one compiled call (:func:`gsik.kernels.fallback.control_step`);
+        the Python branches here are its reference (``compiled_step`` False) and balance's path."""
         s = self._settings
         self._first = None
         if self._rest_damping:
@@ -288,20 +288,15 @@ class Controller(ControlTargets):
             if end[1]:
                 self._errors_left = True  # the trial's, at the pose committed
                 return self._stats(q, W, lam, self._committed(end))
-            out = self._cache.out.tolist()
-            state0 = ak.cached_state(self._cache) if out[ak.R_FRESH] > 0.0 else ak.start_state(self._cache, out)
-            first, judged = self._work.dq.copy(), None
-            if out[ak.R_RESTORED]:  # the full step's trial and its restoring steps judged no better: only the verdict
-                judged = ((ak.VERDICTS[int(out[ak.R_VERDICT])], 0), None, None, None, None)
-                first = self._cache.dq0.copy()
-        else:
-            fresh = self._call(ak.is_fresh, self._cache, q, W)
-            state0 = ak.cached_state(self._cache) if fresh else self._level_state(q, R, p)
-            if not fresh:
-                self._window.ring[:] = 0  # the pose changed from outside
-            first, judged = self._first_trial(q, W, R, p, state0, damping), None
+            return self._stats(q, W, lam, _new_tuple(ControlStats, (False, end[2] > 0.0, end[3] > 0.0, end[4], 0.0,
+                                                                    end[5] > 0.0)))
+        fresh = self._call(ak.is_fresh, self._cache, q, W)
+        state0 = ak.cached_state(self._cache) if fresh else self._level_state(q, R, p)
+        if not fresh:
+            self._window.ring[:] = 0  # the pose changed from outside
+        first = self._first_trial(q, W, R, p, state0, damping)
         self._first = first
-        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first, judged)
+        tries, ((verdict, decided), q2, R2, p2, state) = self._damped_trial(q, W, R, p, state0, first)
         accepted = verdict == BETTER or not s.adaptive_damping
         if accepted:
             step_norm = self._call(step_inputs.norm, q2 - q)  # the compiled call's sum, bit for bit
@@ -332,10 +327,10 @@ class Controller(ControlTargets):
     def _make_step_call(self, W, q, R, p, lam, damping) -> tuple:
         """``(entry, inputs)``: :func:`gsik.kernels.step_inputs.control_step`'s compiled entry and this controller's
         :class:`~gsik.kernels.step_inputs.StepInputs` (numba unboxes one object, not ~70 arrays a step), kept; without
-        numba, :func:`gsik.kernels.accept.control_step` given every argument."""
+        numba, :func:`gsik.kernels.fallback.control_step` given every argument."""
         head, mid, tail = self.step_arguments()
         if not step_inputs.AVAILABLE:
-            self._step_call = (lambda _, W, q, R, p, lam, damping: self._end(ak.control_step(
+            self._step_call = (lambda _, W, q, R, p, lam, damping: self._end(fallback.control_step(
                 *head, W, *mid, q, R, p, lam, damping, *tail)), None)
             return self._step_call
         inputs = step_inputs.make_step_inputs(*head, *mid, *tail)
@@ -344,9 +339,7 @@ class Controller(ControlTargets):
 
     def _end(self, _=None) -> tuple:
         """What :func:`gsik.kernels.step_inputs.control_step` returns, read from the cache (the call without it)."""
-        out, flags = self._cache.out.tolist(), self._cache.flags.tolist()
-        return (out[ak.R_STATUS], out[ak.R_COMMITTED], out[ak.R_CREEPS], flags[ak.F_CONVERGED],
-                flags[ak.F_TARGET_COST], flags[ak.F_LAGGING], step_inputs.norm(self._cache.moved))
+        return fallback.step_end(self._cache)
 
     def _committed(self, end: tuple) -> ControlStats:
         """The :class:`ControlStats` of a step :func:`~gsik.kernels.accept.control_step` committed (``end``: what
@@ -373,15 +366,16 @@ class Controller(ControlTargets):
         held = self._held
         return held is not None and held[2] == damping and _same(q, held[0]) and _same(W, held[1])
 
-    def _damped_trial(self, q, W, R, p, state0: LevelState, dq: np.ndarray, judged) -> tuple[int, tuple]:
+    def _damped_trial(self, q, W, R, p, state0: LevelState, dq: np.ndarray) -> tuple[int, tuple]:
         """``(halvings made, trial)``: the prioritised step ``dq`` (n,) from ``q`` (its full trial in the work
-        buffers, or already ``judged``), halved up to 3 times while its trial (:meth:`_judge`) is worse (with adaptive
-        damping only); if it stays worse, the met levels' correction alone (:meth:`_correction`)."""
+        buffers), halved up to 3 times while its trial (:meth:`_judge`) is worse (with adaptive damping only); if it
+        stays worse, the met levels' correction alone (:meth:`_correction`). Compiled:
+        :func:`gsik.kernels.fallback.control_step`."""
         scale = 1.0
         for tries in range(4):
             if tries:
                 self._trial(q, dq, scale, W)
-            trial = judged if tries == 0 and judged is not None else self._judge(q, W, state0)
+            trial = self._judge(q, W, state0)
             if trial[0][0] != WORSE or not self._settings.adaptive_damping:
                 return tries, trial
             if tries == 0 and self._posture is not None:
@@ -443,8 +437,7 @@ class Controller(ControlTargets):
 
     def first_step(self) -> np.ndarray:
         """(n_dofs,) [rad] the last step's full step (before halving or restoring; not held): a view, read it now."""
-        return self._first if self._first is not None else (
-            self._cache.dq0 if self._cache.out[ak.R_RESTORED] else self._work.dq)
+        return self._first if self._first is not None else self._cache.dq0
 
     def _adapt_damping(self, lam: np.ndarray, damping: float, verdict: str, accepted: bool, tries: int) -> None:
         """Levenberg-Marquardt on ``lam`` (1,): lower it after a full step taken, raise it after a worse one."""
@@ -452,7 +445,7 @@ class Controller(ControlTargets):
         if accepted and s.adaptive_damping:
             lam[0] = max(damping * DAMPING_FALL, s.damping * DAMPING_FLOOR) if tries == 0 else damping
         elif not accepted and verdict == WORSE:
-            lam[0] = min(damping * 10.0, MAX_DAMPING)
+            lam[0] = min(damping * DAMPING_RAISE, MAX_DAMPING)
 
     def _judge(self, q, W, state0: LevelState, upto: int | None = None):
         """``((verdict, deciding level), q, R, p, level state)`` of the trial in the work buffers

@@ -135,8 +135,8 @@ def _studio_drag(compiled: bool, frames: int, solve: bool, monkeypatch) -> tuple
 
 @pytest.mark.parametrize("solve", [False, True], ids=["step", "solve"])
 def test_the_compiled_step_is_the_python_branches_bit_for_bit(solve, monkeypatch):
-    """Same angles, errors, status and step norms every frame; the compiled path commits on the first trial and
-    after restoring steps, and leaves a trial no better after them to the Python branches."""
+    """Same angles, errors, status and step norms every frame; the compiled path commits on the first trial, and
+    after restoring steps or its fallback (gsik.kernels.fallback: ``tests/test_fallback_kernels.py``)."""
     compiled, ends = _studio_drag(True, 12 if solve else 60, solve, monkeypatch)
     reference, _ = _studio_drag(False, 12 if solve else 60, solve, monkeypatch)
     for a, b in zip(compiled, reference):
@@ -144,4 +144,4 @@ def test_the_compiled_step_is_the_python_branches_bit_for_bit(solve, monkeypatch
         assert a.position_errors.tobytes() == b.position_errors.tobytes()
         assert (a.status, a.iterations, a.residual, a.step_norm) == (b.status, b.iterations, b.residual, b.step_norm)
     assert ends[(True, False)] > 0
-    assert ends[(False, True)] > 0 if solve else ends[(True, True)] > 0
+    assert ends[(True, True)] > 0

@@ -11,11 +11,8 @@
 
 :func:`control_step` is the common path in one call: the start state (cached, or evaluated), the step and its trial
 (:func:`gsik.kernels.control.step_trial`), the rule, and when the trial is better the commit (pose, anchors, cache,
-damping). Anything else (a worse or unchanged trial, balance) it leaves to the controller's Python, with the trial in
-the work buffers.
-numba's cache checks a kernel against its own file only: the compiled strict-priority step
-(:mod:`gsik.kernels.priority`) is inside this module's cached kernels, and a change to that file alone leaves them
-stale (delete ``gsik/kernels/__pycache__/*.nb[ic]`` after one).
+damping, :func:`commit`). A worse or unchanged trial it leaves in the work buffers, for the refused step's
+fallback (:func:`gsik.kernels.fallback.control_step`: halvings, the target levels alone, the met levels' correction).
 """
 
 from __future__ import annotations
@@ -58,7 +55,8 @@ class LevelCache(NamedTuple):
         e: (6m,) the targets' error rows there. flags: (4,) the ``F_*`` figures.
         costs0: (L + 1,), met0: (L + 1,) bool, e0: (6m,): the state of a start pose that is not the cached one.
         moved: (n,) the committed step's change of the angles [rad]. out: (10,) :func:`control_step`'s ``R_*``.
-        dq0: (n,) the first step [rad], kept when restoring steps overwrote the work buffers' (``R_RESTORED``).
+        dq0: (n,) the step's first (full) step [rad], kept: restoring steps and the fallback
+        (:mod:`gsik.kernels.fallback`) overwrite the work buffers'.
     """
 
     q: np.ndarray
@@ -140,6 +138,16 @@ def make_window(tolerance_norms: np.ndarray) -> StallWindow:
     return StallWindow(STALL_PROGRESS * np.asarray(tolerance_norms, dtype=float),
                        np.zeros((STALL_WINDOW + 1, k), dtype=np.bool_), np.zeros((STALL_WINDOW + 1, k)),
                        np.zeros(2, dtype=np.int64))
+
+
+@njit(cache=True)
+def norm(v):
+    """``sqrt(sum(v ** 2))`` [rad] of a step ``v`` (n,), summed in order: every controlled step's norm, whether the
+    compiled call committed it (:func:`commit`) or the controller's Python branches did, is this one sum."""
+    s = 0.0
+    for d in range(v.shape[0]):
+        s += v[d] * v[d]
+    return math.sqrt(s)
 
 
 @njit(cache=True)
@@ -257,8 +265,9 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     to ``restoring`` restoring steps of the target levels from it (``gsik.control.Controller._judge``'s, for a
     posture's move that broke a met level); a better trial is committed:
     ``q``, ``R``, ``p`` moved to it (``cache.moved`` the change), anchored into ``cache``, ``lam[0]`` lowered, and
-    unless the change's norm is at most ``stall_tolerance`` [rad] the stall ``window`` asked (:func:`creeps`).
-    ``cache.out``: the ``R_*`` figures."""
+    unless the change's norm is at most ``stall_tolerance`` [rad] the stall ``window`` asked (:func:`creeps`;
+    :func:`commit`). ``cache.out``: the ``R_*`` figures; ``cache.dq0`` the full step. A trial no better is left in
+    ``wk`` (:func:`gsik.kernels.fallback.control_step` goes on from it)."""
     settle, fall, floor = rule
     fresh = is_fresh(cache, q, W)
     out = cache.out
@@ -277,19 +286,29 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     out[R_STATUS] = wk.out[O_STATUS]
     if wk.out[O_STATUS] != priority.OK:
         return
+    cache.dq0[:] = wk.dq  # the first step, kept for halving it and for first_step()
     verdict, decided = compare_levels(c0, anchors0, met0, wk.costs, wk.met, floors, settle, floors.shape[0])
     out[R_RESTORED] = 0.0
     if verdict == V_WORSE and restoring > 0:
         out[R_RESTORED] = 1.0
-        cache.dq0[:] = wk.dq
         verdict, decided = _restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols,
                                     restoring, c0, anchors0, met0, floors, settle, wk)
         if verdict < 0:
             out[R_STATUS] = -verdict - 1
             return
     out[R_VERDICT], out[R_DECIDED] = verdict, decided
-    if verdict != V_BETTER:
-        return
+    if verdict == V_BETTER:
+        commit(q, R, p, W, lam, damping * fall, base * floor, anchors0, decided, posture, stall_tolerance, cache,
+               window, wk)
+
+
+@njit(cache=True)
+def commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tolerance, cache, window, wk):
+    """Commit the trial in ``wk``: ``q``, ``R``, ``p`` moved to it (``cache.moved`` the change), anchored from
+    ``anchors0`` at level ``decided`` into ``cache``, ``lam[0]`` set to ``max(lowered, low)`` (Python's order), and
+    unless the change's norm is at most ``stall_tolerance`` [rad] the stall ``window`` asked (:func:`creeps`;
+    ``cache.out``'s ``R_COMMITTED`` and ``R_CREEPS``)."""
+    out = cache.out
     anchor_into(anchors0, wk.costs, decided, cache.anchors)  # in place when anchors0 is cache.anchors
     for d in range(q.shape[0]):
         cache.moved[d] = wk.q[d] - q[d]
@@ -305,15 +324,10 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     cache.flags[F_CONVERGED] = wk.out[O_CONVERGED]
     cache.flags[F_TARGET_COST] = wk.out[O_TARGET_COST]
     cache.flags[F_LAGGING] = wk.out[O_LAGGING]
-    low = base * floor
-    lowered = damping * fall
     lam[0] = low if low > lowered else lowered  # Python's max(lowered, low)
     out[R_COMMITTED] = 1.0
     out[R_CREEPS] = -1.0
-    moved = 0.0
-    for d in range(q.shape[0]):
-        moved += cache.moved[d] * cache.moved[d]
-    moved = math.sqrt(moved)
+    moved = norm(cache.moved)
     if moved > stall_tolerance * (1.0 + NORM_ROUNDING):  # above it in any summation order: the window decides
         out[R_CREEPS] = 1.0 if creeps(window, cache.met, posture.factor.shape[0] > 0, cache.costs) else 0.0
     elif moved < stall_tolerance * (1.0 - NORM_ROUNDING):

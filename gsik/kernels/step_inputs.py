@@ -9,25 +9,15 @@ so :func:`make_step_inputs` packs them once into a :class:`StepInputs` (a numba 
 
 from __future__ import annotations
 
-import math
-
 from gsik._jit import njit
 from gsik.kernels import accept as ak
+from gsik.kernels import fallback as fb
+from gsik.kernels.accept import norm  # noqa: F401  (every controlled step's norm, as before)
 
 #: What a :class:`StepInputs` holds, in :func:`gsik.kernels.accept.control_step`'s order around the per-step
 #: arguments (``W`` after ``root``; ``q``, ``R``, ``p``, ``lam``, ``damping`` after ``max_step``).
 FIELDS = ("task_model", "fk", "tasks", "posture", "root", "lower", "upper", "max_step", "base", "near", "tols",
           "floors", "rule", "restoring", "stall_tolerance", "cache", "window", "wk")
-
-@njit(cache=True)
-def norm(v):
-    """``sqrt(sum(v ** 2))`` [rad] of a step ``v`` (n,), summed in order: every controlled step's norm, whether the
-    compiled call committed it (:func:`control_step`) or the controller's Python branches did, is this one sum."""
-    s = 0.0
-    for d in range(v.shape[0]):
-        s += v[d] * v[d]
-    return math.sqrt(s)
-
 
 #: False without numba or with ``NUMBA_DISABLE_JIT``: the controller then calls the kernel with every argument.
 AVAILABLE = hasattr(ak.control_step, "overloads")
@@ -57,15 +47,12 @@ if AVAILABLE:
 
     @njit(cache=True)
     def control_step(inputs, W, q, R, p, lam, damping):
-        """:func:`gsik.kernels.accept.control_step` from ``q`` (n,) [rad] at ``W`` (4, 4) (frames ``R``, ``p``;
-        ``lam`` (1,) the adaptive damping, ``damping`` this step's) with a controller's fixed ``inputs``
-        (:func:`make_step_inputs`). Returns what a committed step's statistics need, read from the cache's ``out``
-        and ``flags``: ``(R_STATUS, R_COMMITTED, R_CREEPS, F_CONVERGED, F_TARGET_COST, F_LAGGING)``, then the
-        committed step's :func:`norm` [rad] (of ``cache.moved``)."""
+        """:func:`gsik.kernels.fallback.control_step` (the full step and, when refused, its fallback) from ``q``
+        (n,) [rad] at ``W`` (4, 4) (frames ``R``, ``p``; ``lam`` (1,) the adaptive damping, ``damping`` this
+        step's) with a controller's fixed ``inputs`` (:func:`make_step_inputs`). Returns
+        :func:`gsik.kernels.fallback.step_end`: what the step's statistics need."""
         s = inputs
-        ak.control_step(s.task_model, s.fk, s.tasks, s.posture, s.root, W, s.lower, s.upper, s.max_step, q, R, p,
+        fb.control_step(s.task_model, s.fk, s.tasks, s.posture, s.root, W, s.lower, s.upper, s.max_step, q, R, p,
                         lam, damping, s.base, s.near, s.tols, s.floors, s.rule, s.restoring, s.stall_tolerance,
                         s.cache, s.window, s.wk)
-        out, flags = s.cache.out, s.cache.flags
-        return (out[ak.R_STATUS], out[ak.R_COMMITTED], out[ak.R_CREEPS], flags[ak.F_CONVERGED],
-                flags[ak.F_TARGET_COST], flags[ak.F_LAGGING], norm(s.cache.moved))
+        return fb.step_end(s.cache)
