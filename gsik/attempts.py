@@ -343,6 +343,8 @@ class AttemptPolicy:
         posture = self._posture_settle(c, converged)
         st = None
         it = 0
+        if posture is not None:
+            c.settle_steps(self._settings.posture_tolerance)  # a worse step that settles it is not retried
         try:
             for it in range(1, iterations + 1):
                 before = self._q.copy() if posture is not None else None
@@ -356,6 +358,7 @@ class AttemptPolicy:
             if posture is not None:  # the gain learnt stays for an attempt from here; a step takes it whole
                 self._posture_gain = (c, self._q.tobytes(), float(c.posture_gain[0]))
                 c.posture_gain[0] = 1.0
+                c.settle_steps(0.0)
         return st, it
 
     def _posture_settle(self, c, converged: bool | None = None) -> PostureSettle | None:

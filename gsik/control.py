@@ -60,6 +60,13 @@ _new_tuple = tuple.__new__  # a NamedTuple with every field given, without its _
 TRACKING_ERROR = 10.0
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
+#: ... in a solve()'s attempt that settles its posture (:meth:`Controller.settle_steps`). Counted on bench_drag's
+#: three controlled paths, warm solve() drags of 150 frames: of ~1900 restorings the first step decided all but 3
+#: (studio), the third none, and a failed restoring cost 3 linearisations (hands at 0: 5.3 a frame). At 1, with the
+#: settle refusals: 12.3 / 7.7 / 14.6 prioritised solves a warm solve() -> 6.9 / 5.6 / 11.4 (hands at 0 / pins /
+#: studio) at the same quality (README, "Warm solve() with a posture"). step() keeps 3: the retargeter's steps (and
+#: so the bundled priors) stay as they were.
+SETTLE_RESTORING_STEPS = 1
 #: While steps succeed the adaptive damping falls to this fraction of ``settings.damping`` (the fast path's floor is
 #: 0.1): near a fold of a target's reach (a straight spine raising the head, a straight leg) the smallest singular
 #: value of a level seen in what the levels above leave it is ~3e-3, and a step closes only ``s^2 / (s^2 + lam)`` of
@@ -97,6 +104,11 @@ class Controller(ControlTargets):
 
     #: False: every step through the Python branches (the reference the compiled common path is tested against).
     compiled_step = True
+    #: False: a worse full step that would settle a solve()'s posture is retried as any other (:meth:`settle_steps`;
+    #: what benchmarks/bench_drag.py measures that shortcut's quality against).
+    settle_refusals = True
+    #: Restoring steps of the steps to come (:meth:`settle_steps`).
+    _restoring = RESTORING_STEPS
     #: The last step's full step when the Python branches judged it, ``None`` when the compiled call made the step.
     _first: np.ndarray | None = None
 
@@ -185,7 +197,7 @@ class Controller(ControlTargets):
         self._near = floors[:-1] / TIGHTEN_FRACTION ** 2
         self._window = ak.make_window(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
         self._cache = ak.make_cache(self._sk.n_dofs, len(self._tasks), L)  # the last accepted pose's levels
-        self._step_call = None  # (compiled entry, StepInputs): made at the first compiled step for these inputs
+        self._step_calls = {}  # restoring steps: (compiled entry, StepInputs), made at the first such compiled step
 
     def _call(self, kernel, *args):
         """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""
@@ -281,7 +293,7 @@ class Controller(ControlTargets):
         if self._holds(q, W, damping):
             return self._held[3]  # the same step from the same pose: it would hold again
         if self._balance is None and s.adaptive_damping and self.compiled_step:
-            entry, inputs = self._step_call or self._make_step_call(W, q, R, p, lam, damping)
+            entry, inputs = self._step_calls.get(self._restoring) or self._make_step_call(W, q, R, p, lam, damping)
             end = entry(inputs, W, q, R, p, lam, damping)
             if end[0] != priority_kernel.OK:
                 raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
@@ -321,7 +333,7 @@ class Controller(ControlTargets):
                 (self._lower, self._upper, s.max_step),
                 (s.damping, self._near, self._tols, self._floors, (float(s.settle_tolerance), DAMPING_FALL,
                                                                    DAMPING_FLOOR),
-                 RESTORING_STEPS if self._posture is not None else 0, float(s.stall_tolerance), self._cache,
+                 self._restoring if self._posture is not None else 0, float(s.stall_tolerance), self._cache,
                  self._window, self._work))
 
     def _make_step_call(self, W, q, R, p, lam, damping) -> tuple:
@@ -330,12 +342,13 @@ class Controller(ControlTargets):
         numba, :func:`gsik.kernels.fallback.control_step` given every argument."""
         head, mid, tail = self.step_arguments()
         if not step_inputs.AVAILABLE:
-            self._step_call = (lambda _, W, q, R, p, lam, damping: self._end(fallback.control_step(
+            call = (lambda _, W, q, R, p, lam, damping: self._end(fallback.control_step(
                 *head, W, *mid, q, R, p, lam, damping, *tail)), None)
-            return self._step_call
-        inputs = step_inputs.make_step_inputs(*head, *mid, *tail)
-        self._step_call = (compiled_entry(step_inputs.control_step, inputs, W, q, R, p, lam, damping), inputs)
-        return self._step_call
+        else:
+            inputs = step_inputs.make_step_inputs(*head, *mid, *tail)
+            call = (compiled_entry(step_inputs.control_step, inputs, W, q, R, p, lam, damping), inputs)
+        self._step_calls[self._restoring] = call
+        return call
 
     def _end(self, _=None) -> tuple:
         """What :func:`gsik.kernels.step_inputs.control_step` returns, read from the cache (the call without it)."""
@@ -378,12 +391,32 @@ class Controller(ControlTargets):
             trial = self._judge(q, W, state0)
             if trial[0][0] != WORSE or not self._settings.adaptive_damping:
                 return tries, trial
+            if tries == 0 and self._settles(state0, dq):
+                return tries, trial
             if tries == 0 and self._posture is not None:
                 targets = self._targets_alone(q, W, R, p, state0)
                 if targets is not None:
                     return 0, targets
             scale *= 0.5
         return tries, self._correction(q, W, R, p, state0) or trial
+
+    def settle_steps(self, tolerance: float) -> None:
+        """The posture's settle tolerance [rad] of the steps to come: ``settings.posture_tolerance`` while a
+        solve()'s :class:`gsik.stall.PostureSettle` runs, 0 after. While it is on, a worse full step that would
+        settle the posture (:meth:`_settles`) is refused at once (the attempt ends there, where up to 13
+        linearisations of retries would move the pose by about the tolerance at most), and a posture move that
+        broke a met level gets :data:`SETTLE_RESTORING_STEPS` restoring steps, not :data:`RESTORING_STEPS`."""
+        on = tolerance > 0.0 and self.settle_refusals
+        self._cache.settle[0] = tolerance if on else 0.0
+        self._restoring = SETTLE_RESTORING_STEPS if on else RESTORING_STEPS
+
+    def _settles(self, state0: LevelState, dq: np.ndarray) -> bool:
+        """True if the full step ``dq`` (n,) [rad] from the start state ``state0`` settles the posture
+        (:class:`gsik.stall.PostureSettle`'s test at :meth:`settle_steps`'s tolerance; compiled:
+        :func:`gsik.kernels.fallback.settles`)."""
+        tolerance = float(self._cache.settle[0])
+        return tolerance > 0.0 and state0.converged and \
+            float(np.abs(dq).max()) <= tolerance * float(self.posture_gain[0])
 
     def _first_trial(self, q, W, R, p, state0: LevelState, damping: float) -> np.ndarray:
         """The full step (n,) from ``q``, its trial left in the work buffers (one compiled call without balance)."""
@@ -450,7 +483,7 @@ class Controller(ControlTargets):
     def _judge(self, q, W, state0: LevelState, upto: int | None = None):
         """``((verdict, deciding level), q, R, p, level state)`` of the trial in the work buffers
         (:func:`~gsik.acceptance.compare`, on the levels above ``upto`` only if given). When a lower level's move
-        breaks a met higher level (the null space is only flat to first order), up to :data:`RESTORING_STEPS`
+        breaks a met higher level (the null space is only flat to first order), up to :meth:`settle_steps`'s number of
         restoring steps of the target levels from the trial pose bring it back onto them, and that pose is judged
         instead."""
         settle = self._settings.settle_tolerance
@@ -459,7 +492,7 @@ class Controller(ControlTargets):
         if verdict[0] != WORSE or self._posture is None or upto is not None:
             return (verdict,) + first
         q3, R3, p3, state3 = first
-        for _ in range(RESTORING_STEPS):
+        for _ in range(self._restoring):
             self._linearise(q3, R3, p3, state3.error)
             self._trial(q3, self._solve(q, q3, len(self._levels)), 1.0, W)
             q3, R3, p3, state3 = self._trial_state()

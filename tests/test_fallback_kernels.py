@@ -27,10 +27,11 @@ def _targets(poses: dict, frame: int, hand_priority: int, offset) -> dict:
 
 
 def _drag(monkeypatch, compiled: bool, posture: str, hand_priority: int, frames: int, solve: bool = True,
-          offset=(0.0, 0.0, 0.0)) -> tuple[list, collections.Counter]:
+          offset=(0.0, 0.0, 0.0), settle: bool = True, **config) -> tuple[list, collections.Counter]:
     """``(every controlled step's record, how the Python branches ended)`` of a drag of ``solve()`` (or ``step()``)
     calls: a record is the step's statistics, the damping it left, the angles and the full step (bytes), and each
-    frame's result; the counter (the Python branches only) counts each fallback's ending."""
+    frame's result; the counter (the Python branches only) counts each fallback's ending. ``settle``: a worse step
+    that settles the posture is refused without retries (``Controller.settle_refusals``); ``config``: settings."""
     records, ends = [], collections.Counter()
     step, damped = gsik.control.Controller.step, gsik.control.Controller._damped_trial
     targets_alone, correction = gsik.control.Controller._targets_alone, gsik.control.Controller._correction
@@ -56,6 +57,7 @@ def _drag(monkeypatch, compiled: bool, posture: str, hand_priority: int, frames:
         return trial
 
     monkeypatch.setattr(gsik.control.Controller, "compiled_step", compiled)
+    monkeypatch.setattr(gsik.control.Controller, "settle_refusals", settle)
     for name, f in (("step", recorded), ("_damped_trial", counted), ("_targets_alone", alone),
                     ("_correction", corrected)):
         monkeypatch.setattr(gsik.control.Controller, name, f)
@@ -67,6 +69,7 @@ def _drag(monkeypatch, compiled: bool, posture: str, hand_priority: int, frames:
     else:
         use_prior(solver, bundled_prior("biped"))
         solver.configure(tracking_steps=3)
+    solver.configure(**config)
     for frame in range(frames):
         targets = _targets(poses, frame, hand_priority, np.array(offset))
         r = solver.solve(targets) if solve else solver.step(targets)
@@ -85,24 +88,40 @@ def _assert_same(monkeypatch, *args, **kwargs) -> collections.Counter:
     return ends
 
 
-# (path, frames, hands' offset [m], fallback endings each seen at least once in the Python branches)
-CASES = [("hands at 0", 16, (0.0, 0.0, 0.0), [("targets alone", True), ("targets alone", False), ("halved", 1, "better"),
-                                             ("halved", 0, "same"), ("halved", 3, "worse")]),
-         ("pins", 16, (0.0, 0.0, 0.0), [("targets alone", True), ("targets alone", False), ("halved", 1, "better"),
-                                       ("halved", 3, "same")]),
-         ("studio", 30, (0.0, 0.0, 0.0), [("targets alone", True), ("targets alone", False), ("halved", 2, "better"),
-                                         ("halved", 1, "same")]),
-         ("pins", 8, (0.0, -0.3, -0.3), [("correction", True), ("correction", False)])]
+# (path, frames, hands' offset [m], settle refusals, fallback endings each seen at least once in the Python branches)
+CASES = [("hands at 0", 16, (0.0, 0.0, 0.0), True, [("targets alone", True), ("targets alone", False),
+                                                   ("halved", 1, "better"), ("halved", 0, "same"),
+                                                   ("halved", 3, "worse")]),
+         ("pins", 16, (0.0, 0.0, 0.0), True, [("targets alone", True), ("targets alone", False), ("halved", 1, "better"),
+                                             ("halved", 0, "worse")]),
+         ("pins", 16, (0.0, 0.0, 0.0), False, [("halved", 3, "same")]),
+         ("studio", 30, (0.0, 0.0, 0.0), True, [("targets alone", True), ("targets alone", False),
+                                               ("halved", 2, "better"), ("halved", 1, "same")]),
+         ("pins", 8, (0.0, -0.3, -0.3), True, [("correction", True), ("correction", False)])]
 
 
-@pytest.mark.parametrize("path, frames, offset, endings", CASES, ids=[f"{c[0]}, {c[1]} frames" for c in CASES])
-def test_warm_solves_through_the_compiled_fallback_are_the_python_branches_bit_for_bit(path, frames, offset, endings,
-                                                                                      monkeypatch):
+@pytest.mark.parametrize("path, frames, offset, settle, endings", CASES,
+                         ids=[f"{c[0]}, {c[1]} frames, settle {c[3]}" for c in CASES])
+def test_warm_solves_through_the_compiled_fallback_are_the_python_branches_bit_for_bit(path, frames, offset, settle,
+                                                                                      endings, monkeypatch):
     """bench_drag's controlled paths, a warm solve() a frame: the same steps, and the fallback's branches ran: the
-    target levels alone better or not, halvings better or unchanged, refused after every retry, the met levels'
-    correction better (hands dragged far below the pins) or not."""
-    ends = _assert_same(monkeypatch, *PATHS[path], frames, offset=offset)
+    target levels alone better or not, halvings better or unchanged, refused after every retry (``halved, 3,
+    worse``) or at once as the step settles the posture (``halved, 0, worse``), the met levels' correction better
+    (hands dragged far below the pins) or not."""
+    ends = _assert_same(monkeypatch, *PATHS[path], frames, offset=offset, settle=settle)
     assert all(ends[e] > 0 for e in endings), ends
+
+
+def test_a_worse_step_is_refused_at_once_only_where_it_settles_a_solves_posture(monkeypatch):
+    """Without the posture's settle test (``posture_tolerance`` 0) and in step() every worse step is retried; the
+    tolerance is off again after a solve."""
+    for solve, config in ((True, {"posture_tolerance": 0.0}), (False, {})):
+        _, ends = _drag(monkeypatch, False, "start", 1, 16, solve=solve, **config)
+        assert ends[("halved", 0, "worse")] == 0 and sum(ends.values()) > 0
+    solver = gsik.Solver(gsik.load_skeleton("biped"))
+    solver.set_posture(solver.q)
+    solver.solve({"left_hand": gsik.Target(solver.effector_poses()["left_hand"][:3, 3] + 0.05, position_only=True)})
+    assert solver._controller._cache.settle.tolist() == [0.0]
 
 
 def test_steps_through_the_compiled_fallback_are_the_python_branches_bit_for_bit(monkeypatch):

@@ -57,6 +57,9 @@ class LevelCache(NamedTuple):
         moved: (n,) the committed step's change of the angles [rad]. out: (10,) :func:`control_step`'s ``R_*``.
         dq0: (n,) the step's first (full) step [rad], kept: restoring steps and the fallback
         (:mod:`gsik.kernels.fallback`) overwrite the work buffers'.
+        settle: (1,) the posture's settle tolerance [rad] of a solve()'s steps (``settings.posture_tolerance``
+        while :class:`gsik.stall.PostureSettle` runs, else 0): a worse full step that would settle the posture is
+        refused without retries (:func:`gsik.kernels.fallback.settles`).
     """
 
     q: np.ndarray
@@ -72,6 +75,7 @@ class LevelCache(NamedTuple):
     moved: np.ndarray
     out: np.ndarray
     dq0: np.ndarray
+    settle: np.ndarray
 
 
 def make_cache(n_dofs: int, n_tasks: int, n_levels: int) -> LevelCache:
@@ -79,7 +83,7 @@ def make_cache(n_dofs: int, n_tasks: int, n_levels: int) -> LevelCache:
     k = n_levels + 1
     return LevelCache(np.zeros(n_dofs), np.zeros((4, 4)), np.zeros(k), np.zeros(k, dtype=np.bool_), np.zeros(k),
                       np.zeros(6 * n_tasks), np.zeros(4), np.zeros(k), np.zeros(k, dtype=np.bool_),
-                      np.zeros(6 * n_tasks), np.zeros(n_dofs), np.zeros(10), np.zeros(n_dofs))
+                      np.zeros(6 * n_tasks), np.zeros(n_dofs), np.zeros(10), np.zeros(n_dofs), np.zeros(1))
 
 
 def cached_state(cache: LevelCache) -> LevelState:

@@ -72,13 +72,13 @@ def _start(cache):
 def refused(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, lam, damping, base, near, tols,
             floors, rule, restoring, stall_tolerance, cache, window, wk):
     """The fallback of a full step whose trial (in ``wk``, judged ``cache.out[R_VERDICT]``) is no better: a worse
-    one retried (:func:`_retry`), a better retry committed (``lam[0]`` lowered only for the target levels' step
-    alone), else the step refused (:func:`_refuse`)."""
+    one retried (:func:`_retry`) unless it settles the posture (:func:`settles`), a better retry committed
+    (``lam[0]`` lowered only for the target levels' step alone), else the step refused (:func:`_refuse`)."""
     settle, fall, floor = rule
     c0, anchors0, met0, e0 = _start(cache)
     out = cache.out
     verdict, decided, tries = int(out[R_VERDICT]), int(out[R_DECIDED]), 0
-    if verdict == V_WORSE:
+    if verdict == V_WORSE and not settles(cache, posture):
         verdict, decided, tries = _retry(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p,
                                          near, tols, floors, settle, restoring, c0, anchors0, met0, e0, cache, wk)
         if verdict < 0:
@@ -90,6 +90,27 @@ def refused(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, 
         commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tolerance, cache, window, wk)
         return
     _refuse(verdict, lam, damping, posture, c0, met0, cache, window)
+
+
+@njit(cache=True)
+def settles(cache, posture):
+    """True if the full step ``cache.dq0`` settles a solve()'s posture (:class:`gsik.stall.PostureSettle`'s test,
+    ``cache.settle[0]`` its tolerance [rad], > 0): every target within its tolerances at the start pose, and no DOF
+    of the step above the tolerance times the posture's gain. Refused, such a step ends the attempt there; a retry
+    (halved, or the target levels' alone) could move the pose by about that tolerance at most, at the cost of up to
+    13 linearisations (``gsik.control.Controller._damped_trial`` asks the same)."""
+    tolerance = cache.settle[0]
+    if not tolerance > 0.0:
+        return False
+    converged = cache.flags[F_CONVERGED] if cache.out[R_FRESH] > 0.0 else cache.out[R_CONVERGED0]
+    if not converged > 0.0:
+        return False
+    full = 0.0
+    for d in range(cache.dq0.shape[0]):
+        a = abs(cache.dq0[d])
+        if a > full or math.isnan(a):
+            full = a
+    return full <= tolerance * posture.gain[0]
 
 
 @njit(cache=True)
