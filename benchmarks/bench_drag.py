@@ -11,7 +11,8 @@ then dragged position-only round a 0.1 m circle (one turn per 100 frames) for ``
   settings have ``posture_tolerance``, the quality of its settle test against a drag solved with it off (0: a solve
   goes on until a step gains under ``settle_tolerance``): the largest joint-angle difference [rad] and effector
   difference [mm] over every frame and joint, and the range of the posture's cost ratio (frames whose posture cost
-  with it off is at least 1e-3).
+  with it off is at least 1e-3); where the controller has ``settle_refusals``, the same figures against the drag
+  with it off (a worse step that settles the posture retried, three restoring steps: the solve before that change).
 
 Paths: plain (every target at priority 0, no posture: the fast kernel), the posture with the hands at priority 0
 (targets as hard constraints, posture below) and at 1 (the studio's pins), and the studio's default: pins, hands at
@@ -106,18 +107,31 @@ def _posture_cost(solver) -> float:
 
 
 def _solve_drag(posture: str | None, hand_priority: int, frames: int) -> dict:
-    """The solve drag, and where the settings have ``posture_tolerance`` its quality against the drag with it off:
-    ``dq`` the largest joint-angle difference [rad], ``dx`` the largest frame position difference [m], ``ratio``
-    (least, largest) posture cost ratio over the frames whose cost with it off is at least 1e-3."""
-    import gsik
+    """The solve drag, and where the settings have ``posture_tolerance`` its quality (:func:`_against`) against the
+    drag with it off, and (``refusals``) where the controller has ``settle_refusals`` against the drag with those
+    off."""
+    import gsik.control
 
     run = _drag(posture, hand_priority, frames, True)
     if posture is None or "posture_tolerance" not in gsik.solver.setting_names():
         return _plain(run)
-    off = _drag(posture, hand_priority, frames, True, posture_tolerance=0.0)
+    figures = dict(_plain(run), **_against(run, _drag(posture, hand_priority, frames, True, posture_tolerance=0.0)))
+    if hasattr(gsik.control.Controller, "settle_refusals"):
+        gsik.control.Controller.settle_refusals = False
+        try:
+            figures["refusals"] = _against(run, _drag(posture, hand_priority, frames, True))
+        finally:
+            gsik.control.Controller.settle_refusals = True
+    return figures
+
+
+def _against(run: dict, off: dict) -> dict:
+    """``run``'s quality against the drag ``off``: ``dq`` the largest joint-angle difference [rad], ``dx`` the
+    largest frame position difference [m], ``ratio`` (least, largest) posture cost ratio over the frames whose cost
+    in ``off`` is at least 1e-3 (``None``: no such frame)."""
     kept = off["cost"] >= 1e-3
     ratio = run["cost"][kept] / off["cost"][kept]
-    return dict(_plain(run), dq=float(np.abs(run["q"] - off["q"]).max()),
+    return dict(dq=float(np.abs(run["q"] - off["q"]).max()),
                 dx=float(np.linalg.norm(run["points"] - off["points"], axis=-1).max()),
                 ratio=(float(ratio.min()), float(ratio.max())) if ratio.size else None)
 
@@ -136,15 +150,17 @@ def run(frames: int) -> dict:
 def _print(rows: dict, frames: int) -> None:
     print(f"load {os.getloadavg()[0]:.1f}; {frames} frames\n")
     print("| code | path | step µs (x plain) | hands within 1 mm | pins within 0.1 mm | warm solve() ms (x plain) "
-          "| linearisations | solve µs per linearisation (x step) | vs posture_tolerance 0: max rad, mm, cost ratio |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "| linearisations | solve µs per linearisation (x step) | vs posture_tolerance 0: max rad, mm, cost ratio "
+          "| vs settle_refusals off |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for code, row in rows.items():
         plain = row["plain"]
         for name, r in row.items():
             s, v = r["step"], r["solve"]
             print(f"| {code} | {name} | {s['us']:.0f} ({s['us'] / plain['step']['us']:.1f}x) | {s['hands']}/{frames} "
                   f"| {s['pins']}/{frames} | {v['us'] / 1e3:.2f} ({v['us'] / plain['solve']['us']:.1f}x) "
-                  f"| {v['iterations']:.0f} | {_per_linearisation(v, s)} | {_quality(v)} |")
+                  f"| {v['iterations']:.0f} | {_per_linearisation(v, s)} | {_quality(v)} "
+                  f"| {_quality(v.get('refusals', {}))} |")
 
 
 def _per_linearisation(v: dict, s: dict) -> str:
