@@ -24,8 +24,8 @@ of jittering, and a held step costs nothing.
 
 A step without balance is one compiled call (:mod:`gsik.kernels.fallback` over :mod:`gsik.kernels.accept` and
 :mod:`gsik.kernels.control`, its fixed inputs held by one :mod:`gsik.kernels.step_inputs` object); this module keeps
-the same branches in Python, balance's path and the compiled call's reference. Its inputs live in :mod:`gsik.control_inputs`, its retargeting and reports in
-:mod:`gsik.control_targets`.
+the same branches in Python, balance's path and the compiled call's reference. Its inputs live in
+:mod:`gsik.control_inputs`, its retargeting and reports in :mod:`gsik.control_targets`.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from gsik.kernels import compiled_entry
 from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
 from gsik.kernels import fallback
-from gsik.kernels.fallback import DAMPING_RAISE, MAX_DAMPING  # noqa: F401  (MAX_DAMPING: gsik.control's name)
+from gsik.kernels.fallback import DAMPING_RAISE, HALVINGS, MAX_DAMPING
 from gsik.kernels import kinematics as kernels
 from gsik.kernels import priority as priority_kernel
 from gsik.kernels import step_inputs
@@ -381,11 +381,11 @@ class Controller(ControlTargets):
 
     def _damped_trial(self, q, W, R, p, state0: LevelState, dq: np.ndarray) -> tuple[int, tuple]:
         """``(halvings made, trial)``: the prioritised step ``dq`` (n,) from ``q`` (its full trial in the work
-        buffers), halved up to 3 times while its trial (:meth:`_judge`) is worse (with adaptive damping only); if it
-        stays worse, the met levels' correction alone (:meth:`_correction`). Compiled:
+        buffers), halved up to :data:`HALVINGS` times while its trial (:meth:`_judge`) is worse (with adaptive
+        damping only); if it stays worse, the met levels' correction alone (:meth:`_correction`). Compiled:
         :func:`gsik.kernels.fallback.control_step`."""
         scale = 1.0
-        for tries in range(4):
+        for tries in range(HALVINGS + 1):
             if tries:
                 self._trial(q, dq, scale, W)
             trial = self._judge(q, W, state0)

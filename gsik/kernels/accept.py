@@ -295,7 +295,7 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     out[R_RESTORED] = 0.0
     if verdict == V_WORSE and restoring > 0:
         out[R_RESTORED] = 1.0
-        verdict, decided = _restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols,
+        verdict, decided = restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols,
                                     restoring, c0, anchors0, met0, floors, settle, wk)
         if verdict < 0:
             out[R_STATUS] = -verdict - 1
@@ -339,7 +339,7 @@ def commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tole
 
 
 @njit(cache=True)
-def _restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols, restoring, c0, anchors0,
+def restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols, restoring, c0, anchors0,
              met0, floors, settle, wk):
     """Up to ``restoring`` steps of the target levels (the first ``L`` packed levels, ``near`` (L,)) linearised at
     the trial in ``wk``, each from there within the box counted from ``q``, until a trial is no worse than the start

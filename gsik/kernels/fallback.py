@@ -8,7 +8,9 @@ restoring steps of ``_judge``, ``_adapt_damping``) try, in order:
 2. the full step halved up to 3 times (each trial, with a posture, given up to ``restoring`` restoring steps);
 3. the step of the met levels above the first unmet one alone, kept if it tightens them;
 
-and refuse the step otherwise (the damping raised tenfold up to :data:`MAX_DAMPING`). :func:`control_step` runs the
+and refuse the step otherwise (the damping raised tenfold up to :data:`MAX_DAMPING`); in a solve() attempt that
+settles a posture, a worse full step that passes the posture's settle test is refused without them (:func:`settles`,
+``gsik.control.Controller.settle_steps``). :func:`control_step` runs the
 same over the same buffers, bit for bit (``tests/test_fallback_kernels.py`` compares the two on drags), so a refused
 step no longer leaves the compiled code. :func:`step_end` reads what a step's statistics need.
 """
@@ -19,9 +21,29 @@ import math
 
 from gsik._jit import njit
 from gsik.kernels import priority
-from gsik.kernels.accept import F_CONVERGED, F_LAGGING, F_TARGET_COST, R_COMMITTED, R_CONVERGED0, R_CREEPS, \
-    R_DECIDED, R_FRESH, R_LAGGING0, R_STATUS, R_TARGET_COST0, R_VERDICT, V_BETTER, V_SAME, V_WORSE, _restore, \
-    commit, compare_levels, control_step as full_step, creeps, norm
+from gsik.kernels.accept import (
+    F_CONVERGED,
+    F_LAGGING,
+    F_TARGET_COST,
+    R_COMMITTED,
+    R_CONVERGED0,
+    R_CREEPS,
+    R_DECIDED,
+    R_FRESH,
+    R_LAGGING0,
+    R_STATUS,
+    R_TARGET_COST0,
+    R_VERDICT,
+    V_BETTER,
+    V_SAME,
+    V_WORSE,
+    commit,
+    compare_levels,
+    creeps,
+    norm,
+    restore,
+)
+from gsik.kernels.accept import control_step as full_step
 from gsik.kernels.control import box, linearise, trial
 
 #: Largest adaptive damping (the fast path's too): a step refused at it holds the pose.
@@ -153,7 +175,7 @@ def _retry(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R
         trial(fk, tasks, posture, root, W, lower, upper, q, cache.dq0, scale, wk)
         verdict, decided = compare_levels(c0, anchors0, met0, wk.costs, wk.met, floors, settle, floors.shape[0])
         if verdict == V_WORSE and restoring > 0:
-            verdict, decided = _restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near,
+            verdict, decided = restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near,
                                         tols, restoring, c0, anchors0, met0, floors, settle, wk)
             if verdict < 0:
                 return verdict, 0, tries
