@@ -116,7 +116,7 @@ def test_only_a_full_well_conditioned_square_factor_takes_the_normal_equations(r
     singular = full.copy()
     singular[-1] = 0.0
     assert normal_matrix(singular).shape == (0, n)
-    assert normal_matrix(_full_factor(rng, n, 10.0 / WELL_CONDITIONED)).shape == (0, n)
+    assert normal_matrix(_full_factor(rng, n, 10.0 / np.sqrt(WELL_CONDITIONED))).shape == (0, n)
     assert normal_matrix(full[:4]).shape == (0, n)
     not_finite = full.copy()
     not_finite[2, 3] = np.nan

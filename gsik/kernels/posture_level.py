@@ -31,27 +31,31 @@ from gsik.kernels import priority
 from gsik.kernels.pgs import _cholesky_solve
 from gsik.kernels.rows import axpy1, dot, dot1
 
-#: A posture factor is solved by its normal equations when its smallest singular value is at least this fraction of
-#: its largest (the precision's condition number at most 1e8): the pivoted QR's pivots are then at least
-#: ``1e-4 / sqrt(n)`` of its largest row norm, five orders above :data:`gsik.priority.RANK_TOLERANCE`, and the normal
+#: A posture factor is solved by its normal equations when its precision ``P = L^T L`` minus this fraction of its
+#: trace is still positive definite: its condition number is then below ``n / 1e-8`` and ``sigma_min(L)`` above
+#: ``1e-4`` times ``sqrt(trace P)`` (at least the largest row norm), so the pivoted QR's pivots are at least
+#: ``1e-4 / sqrt(n)`` of that row norm, five orders above :data:`gsik.priority.RANK_TOLERANCE`, and the normal
 #: equations lose no more than ~1e-8 of the step to rounding.
-WELL_CONDITIONED = 1e-4
+WELL_CONDITIONED = 1e-8
 
 
 def normal_matrix(factor: np.ndarray) -> np.ndarray:
     """``P = L^T L`` (n, n) of a posture factor ``L`` (k, n) whose level :func:`prioritized_step_posture` solves by
-    its normal equations: a square, full, well-conditioned one (:data:`WELL_CONDITIONED`) that is not diagonal; else
-    (0, n): the pivoted QR's level (a diagonal factor's runs over one column per DOF, as cheap; a rank-deficient one
-    needs the QR's rank)."""
+    its normal equations: a square, finite, well-conditioned one (:data:`WELL_CONDITIONED`, one Cholesky test, no
+    decomposition: a conditioned prior sets a posture a frame) that is not diagonal; else (0, n): the pivoted QR's
+    level (a diagonal factor's runs over one column per DOF, about as cheap; a rank-deficient one needs the QR's
+    rank)."""
     L = np.asarray(factor, dtype=float)
     n = L.shape[1]
     none = np.zeros((0, n))
     if L.shape[0] != n or n == 0 or not np.all(np.isfinite(L)) or not np.any(L - np.diag(np.diag(L))):
         return none
-    s = np.linalg.svd(L, compute_uv=False)
-    if not s[-1] >= WELL_CONDITIONED * s[0]:
+    P = np.ascontiguousarray(L.T @ L)
+    try:
+        np.linalg.cholesky(P - (WELL_CONDITIONED * np.trace(P)) * np.eye(n))
+    except np.linalg.LinAlgError:
         return none
-    return np.ascontiguousarray(L.T @ L)
+    return P
 
 
 @njit(cache=True)
