@@ -121,3 +121,17 @@ def test_only_a_full_well_conditioned_square_factor_takes_the_normal_equations(r
     not_finite = full.copy()
     not_finite[2, 3] = np.nan
     assert normal_matrix(not_finite).shape == (0, n)
+
+
+def test_posture_rows_without_a_normal_matrix_keep_the_pivoted_qr(rng):
+    """Built from three fields (as before the normal matrix), or with a diagonal factor: an empty normal matrix."""
+    from gsik.kernels.control import PostureRows, posture_rows
+
+    n = 5
+    assert PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1)).normal.shape[0] == 0
+    assert posture_rows(None, np.zeros((0, n))).normal.shape == (0, n)
+    assert posture_rows(np.zeros(n), posture_factor(np.ones(n))).normal.shape == (0, n)
+    full = _full_factor(rng, n)
+    rows = posture_rows(np.ones(n), full)
+    np.testing.assert_array_equal(rows.factor, full)
+    np.testing.assert_allclose(rows.normal, full.T @ full, atol=1e-15)

@@ -74,13 +74,14 @@ class PostureRows(NamedTuple):
         factor: (k, n_dofs) ``L`` with ``P = L^T L`` (k = 0: no posture).
         gain: (1,) the share of the posture's Gauss-Newton step a step takes (its errors' scale; 1: all of it).
         normal: (n_dofs, n_dofs) ``P`` where the step solves the level by its normal equations (a full,
-            well-conditioned factor: :func:`gsik.kernels.posture_level.normal_matrix`), else (0, n_dofs).
+            well-conditioned factor: :func:`gsik.kernels.posture_level.normal_matrix`), else empty (default:
+            the pivoted QR's level).
     """
 
     reference: np.ndarray
     factor: np.ndarray
     gain: np.ndarray
-    normal: np.ndarray
+    normal: np.ndarray = np.zeros((0, 0))  # empty: nothing in it to change
 
 
 def posture_rows(reference: np.ndarray | None, factor: np.ndarray) -> PostureRows:
