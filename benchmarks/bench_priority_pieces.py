@@ -7,8 +7,10 @@ the drag's start pose (``pins``: a diagonal factor). Printed, one run:
 1. In how many of ``--frames`` frames of ``Solver.step()`` the last :func:`gsik.kernels.accept.control_step` made
    restoring steps (``R_RESTORED``).
 2. At every 20th frame's committed pose, the pieces of one step, each timed ``--repeat`` times inside one compiled
-   loop (no dispatch), medians over the frames [µs]: the strict-priority kernel on its first 1, 2 and all 3 packed
-   levels (the last's cost is the difference; the pins' and hands' levels alone are what a restoring step solves),
+   loop (no dispatch), medians over the frames [µs]: the strict-priority kernel (pivoted QR every level) on its first
+   1, 2 and all 3 packed levels (the last's cost is the difference; the pins' and hands' levels alone are what a
+   restoring step solves), the step's kernel on all of them as the step calls it
+   (:func:`~gsik.kernels.posture_level.prioritized_step_posture`: a full posture by its normal equations),
    :func:`~gsik.kernels.control.linearise`, :func:`~gsik.kernels.control.trial` (forward kinematics and level state).
 
 Run: ``python benchmarks/bench_priority_pieces.py [--posture prior|pins] [--frames 300]``. Nothing here is asserted
@@ -28,7 +30,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_drag import _solver, _targets  # noqa: E402  (the drag's solver and targets, in one place)
 
 from gsik._jit import njit  # noqa: E402
-from gsik.kernels import accept, control, priority  # noqa: E402
+from gsik.kernels import accept, control, posture_level, priority  # noqa: E402
 
 
 @njit
@@ -36,6 +38,14 @@ def _priority_loop(repeat, rows, errors, weights, starts, dampings, lo, hi, tols
     rank_tol, box_tol, box_rel_tol = tols
     for _ in range(repeat):
         priority.prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq)
+
+
+@njit
+def _posture_loop(repeat, rows, errors, weights, starts, dampings, lo, hi, tols, normal, dq):
+    rank_tol, box_tol, box_rel_tol = tols
+    for _ in range(repeat):
+        posture_level.prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                                               box_rel_tol, normal, dq)
 
 
 @njit
@@ -72,6 +82,8 @@ def _pieces(solver, repeat: int) -> dict[str, float]:
     for levels in range(1, len(wk.dampings) + 1):
         out[f"priority kernel, levels 0-{levels - 1}"] = _cpu_us(
             _priority_loop, repeat, *packed, tasks.starts[:levels + 1], wk.dampings[:levels], wk.lo, wk.hi, c._tols, dq)
+    out["the step's kernel, all levels"] = _cpu_us(_posture_loop, repeat, *packed, tasks.starts, wk.dampings, wk.lo,
+                                                    wk.hi, c._tols, c._posture_rows.normal, dq)
     out["linearise"] = _cpu_us(_linearise_loop, repeat, c._task_model, tasks, c._posture_rows, q, R, p,
                                c._cache.e.copy(), wk)
     out["trial (FK + level state)"] = _cpu_us(_trial_loop, repeat, c._fk_model, tasks, c._posture_rows, c._root,

@@ -120,9 +120,8 @@ class Controller(ControlTargets):
         self._posture = posture
         n = skeleton.n_dofs
         # The posture's precision factored once (a learned prior's is a full matrix): each step only multiplies.
-        self._posture_rows = ck.PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1)) if posture is None else \
-            ck.PostureRows(np.array(posture.reference, dtype=float), np.ascontiguousarray(posture_factor(
-                posture.precision)), np.ones(1))
+        self._posture_rows = ck.posture_rows(None, np.zeros((0, n))) if posture is None else \
+            ck.posture_rows(posture.reference, posture_factor(posture.precision))
         self.posture_gain = self._posture_rows.gain  # (1,) the share of the posture's step taken: 1 but in solve()
         self._lower, self._upper = np.array(skeleton.lower, dtype=float), np.array(skeleton.upper, dtype=float)
         self._tols = (RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE)

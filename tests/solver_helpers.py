@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from hypothesis import strategies as st
 
 import gsik
 
@@ -26,3 +27,18 @@ def studio_drag_targets(poses: dict[str, np.ndarray], frame: int, right_weight: 
     for hand, weight in (("left_hand", 1.0), ("right_hand", right_weight)):
         targets[hand] = gsik.Target(poses[hand][:3, 3] + circle, position_only=True, priority=1, weight=weight)
     return targets
+
+
+def hard_level(draw, rng: np.random.Generator, m: int, n: int, error_scale: float = 1.0):
+    """A random :class:`gsik.priority.Level` of ``m`` rows on ``n`` DOFs for a hypothesis strategy (``draw``): maybe
+    a duplicated row or a zero row (rank-deficient), maybe DOFs it does not move."""
+    from gsik.priority import Level
+
+    J = rng.normal(size=(m, n))
+    if m >= 2 and draw(st.booleans()):
+        J[-1] = J[0]
+    if m >= 1 and draw(st.booleans()):
+        J[rng.integers(m)] = 0.0
+    if draw(st.booleans()):
+        J[:, rng.random(n) < 0.3] = 0.0
+    return Level(J, rng.normal(size=m) * error_scale, rng.uniform(0.1, 2.0, size=m))

@@ -7,6 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gsik.priority import Level, pack_levels, posture_level, prioritized_step, prioritized_step_svd
+from solver_helpers import hard_level
 
 
 def _levels(rng, n, sizes):
@@ -107,14 +108,7 @@ def hard_problems(draw):
     rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
     levels = []
     for m in draw(st.lists(st.integers(0, 8), min_size=1, max_size=4)):
-        J = rng.normal(size=(m, n))
-        if m >= 2 and draw(st.booleans()):
-            J[-1] = J[0]
-        if m >= 1 and draw(st.booleans()):
-            J[rng.integers(m)] = 0.0
-        if draw(st.booleans()):
-            J[:, rng.random(n) < 0.3] = 0.0
-        levels.append(Level(J, rng.normal(size=m), rng.uniform(0.1, 2.0, size=m)))
+        levels.append(hard_level(draw, rng, m, n))
     width = draw(st.sampled_from([0.01, 0.3, 3.0]))
     lo, hi = _box(rng, n, width)
     if draw(st.booleans()):

@@ -7,7 +7,8 @@ compiled over named contracts, so a step is one call (:func:`step_trial`) and a 
 
 - :class:`ControlTasks`: the targets, each task's level and the bounds of its band and of convergence, and which
   error row goes to which packed row (what depends on the row weights only).
-- :class:`PostureRows`: the posture's reference and its precision's factor ``L`` (``P = L^T L``), factored once.
+- :class:`PostureRows`: the posture's reference and its precision's factor ``L`` (``P = L^T L``), factored once
+  (and ``P`` itself where the step solves a full posture's level by its normal equations).
 - :class:`ControlWork`: every buffer a step writes, allocated once per controller.
 
 The packed levels (:class:`gsik.priority.PackedLevels`) are the target levels in priority order (balance's two
@@ -29,6 +30,7 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
+from gsik.kernels.posture_level import normal_matrix, prioritized_step_posture
 
 # Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
 # convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0).
@@ -65,17 +67,31 @@ class ControlTasks(NamedTuple):
 
 
 class PostureRows(NamedTuple):
-    """The posture level: minimise ``|L (q + dq - reference)|^2``.
+    """The posture level: minimise ``|L (q + dq - reference)|^2`` (:func:`posture_rows`).
 
     Attributes:
         reference: (n_dofs,) the preferred angles [rad].
         factor: (k, n_dofs) ``L`` with ``P = L^T L`` (k = 0: no posture).
         gain: (1,) the share of the posture's Gauss-Newton step a step takes (its errors' scale; 1: all of it).
+        normal: (n_dofs, n_dofs) ``P`` where the step solves the level by its normal equations (a full,
+            well-conditioned factor: :func:`gsik.kernels.posture_level.normal_matrix`), else empty (default:
+            the pivoted QR's level).
     """
 
     reference: np.ndarray
     factor: np.ndarray
     gain: np.ndarray
+    normal: np.ndarray = np.zeros((0, 0))  # empty: nothing in it to change
+
+
+def posture_rows(reference: np.ndarray | None, factor: np.ndarray) -> PostureRows:
+    """The :class:`PostureRows` of a posture at ``reference`` (n,) [rad] with the factor ``factor`` (k, n) of its
+    precision (``None`` and (0, n): no posture); gain 1."""
+    n = factor.shape[1]
+    if reference is None:
+        return PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1), np.zeros((0, n)))
+    factor = np.ascontiguousarray(factor, dtype=float)
+    return PostureRows(np.array(reference, dtype=float), factor, np.ones(1), normal_matrix(factor))
 
 
 class ControlWork(NamedTuple):
@@ -241,7 +257,8 @@ def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, 
     """One prioritised step from ``q`` (n,) [rad] (frames ``R``, ``p``, error rows ``e``, level ``costs`` there) and
     its trial, into ``wk``: the levels linearised and packed (:func:`linearise`), each one's damping
     (:func:`dampings_into`, the adaptive ``lam`` and the ``base`` damping, ``near`` (L,)), the box (:func:`box`),
-    the step ``wk.dq`` (:func:`gsik.kernels.priority.prioritized_step`; ``tols``: its rank, box and relative box
+    the step ``wk.dq`` (:func:`gsik.kernels.posture_level.prioritized_step_posture`, a full posture's level by its
+    normal equations; ``tols``: its rank, box and relative box
     tolerances, a tuple) and the trial at ``q + dq`` (:func:`trial`). ``wk.out[O_STATUS]``: the step kernel's status (no trial
     when not OK)."""
     linearise(task_model, tasks, posture, q, R, p, e, wk)
@@ -249,8 +266,8 @@ def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, 
     dampings_into(costs, near, lam, base, posture_on, wk.dampings)
     box(q, q, lower, upper, max_step, wk.lo, wk.hi)
     rank_tol, box_tol, box_rel_tol = tols
-    status = priority.prioritized_step(wk.rows, wk.errors, wk.weights, tasks.starts, wk.dampings, wk.lo, wk.hi,
-                                       rank_tol, box_tol, box_rel_tol, wk.dq)
+    status = prioritized_step_posture(wk.rows, wk.errors, wk.weights, tasks.starts, wk.dampings, wk.lo, wk.hi,
+                                      rank_tol, box_tol, box_rel_tol, posture.normal, wk.dq)
     wk.out[O_STATUS] = status
     if status == priority.OK:
         trial(fk, tasks, posture, root, W, lower, upper, q, wk.dq, 1.0, wk)

@@ -100,29 +100,51 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
     Returns:
         :data:`OK`, or :data:`NOT_FINITE` when a level's matrix held a non-finite number (``dq`` is then undefined).
     """
-    n = lo.shape[0]
+    wk, last = begin(starts, dampings, lo, dq)
+    status, _, _, _ = solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol,
+                                   last + 1, last, dq)
+    if status == OK:
+        clip(dq, lo, hi)
+    return status
+
+
+@njit(cache=True)
+def begin(starts, dampings, lo, dq):
+    """``(wk, last)``: the :class:`Work` for these levels and the last level with rows (-1: none); ``dq`` zeroed."""
     m_max = 0
     last = -1  # the last level with rows: the free basis is needed only above it
     for lv in range(dampings.shape[0]):
         if starts[lv + 1] > starts[lv]:
             last = lv
             m_max = max(m_max, starts[lv + 1] - starts[lv])
-    wk = make_work(n, m_max)
     dq[:] = 0.0
+    return make_work(lo.shape[0], m_max), last
+
+
+@njit(cache=True)
+def solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, stop, last, dq):
+    """Levels ``0 ... stop - 1`` into ``dq`` (the free basis kept below each level before ``last``); returns
+    ``(status, z0, rz, identity)``: :data:`OK` or :data:`NOT_FINITE`, and the free basis left (``wk.Zt``'s rows
+    ``z0:z0 + rz``, or the unstored identity)."""
     # The free basis: the identity at first (flagged: the first level needs no product J Z, no stored basis).
-    z0, rz, identity = 0, n, True
-    for lv in range(last + 1):
+    z0, rz, identity = 0, lo.shape[0], True
+    for lv in range(stop):
         if rz == 0:
             break
         m = _weigh(rows, errors, weights, starts[lv], starts[lv + 1], wk.JwT, wk.ew, wk.w, wk.span)
         scale = _project(wk.JwT, m, wk.Zt, z0, rz, identity, wk.AT0, wk.w, wk.span)
         if not math.isfinite(scale):
-            return NOT_FINITE
+            return NOT_FINITE, z0, rz, identity
         z0, rz, identity = _solve_level(wk, m, z0, rz, identity, dq, lo, hi, dampings[lv], rank_tol * scale, box_tol,
                                         box_rel_tol, lv < last)
-    for d in range(n):
-        dq[d] = min(max(dq[d], lo[d]), hi[d])  # rounding only: the loop keeps dq in the box
-    return OK
+    return OK, z0, rz, identity
+
+
+@njit(cache=True)
+def clip(dq, lo, hi):
+    """``dq`` (n,) clipped into the box (rounding only: the levels keep it there)."""
+    for d in range(dq.shape[0]):
+        dq[d] = min(max(dq[d], lo[d]), hi[d])
 
 
 @njit(cache=True)

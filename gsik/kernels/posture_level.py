@@ -1,0 +1,208 @@
+"""The posture level of the strict-priority step by its normal equations: a full posture factor at a fraction of the
+pivoted QR's cost.
+
+The posture is the last level, ``|L (q + dq - reference)|^2`` with a factor ``L`` (n, n) fixed for a controller
+(``P = L^T L``, the precision). In the free basis ``Z`` the levels above leave (``rz`` directions, the rows of
+:class:`gsik.kernels.priority.Work`'s ``Zt``), its damped least-squares step from ``dq`` is
+
+    ``z = (Z^T P Z + damping I)^-1 Z^T (g - P dq)``, ``g = L^T e`` (``e`` the level's errors),
+
+where :func:`gsik.kernels.priority.prioritized_step` runs a pivoted QR of ``(L Z)^T`` (rz, n) and a ``k x k``
+Cholesky solve. For a well-conditioned ``L`` (:func:`normal_matrix`) that QR always finds full rank: each of its
+pivots is at least ``sigma_min(L) / sqrt(n)`` (``sigma_min(L Z) >= sigma_min(L)``; a pivot is the largest column
+norm of a block whose largest singular value is at least ``sigma_min``), far above the rank tolerance times the
+largest row norm (at most ``sigma_max(L)``). Both are then the same step up to rounding. Here:
+
+- ``Z^T P`` (rz, n) is one blocked product over contiguous rows (four directions a pass: each row of ``P`` loaded
+  once per four), ``N = Z^T P Z`` (rz, rz) its dot products with the basis' rows: no level weighing, no product with
+  the factor's transpose, no pivoted QR;
+- when a DOF locks at the box, the basis is turned so that only its first direction moves that DOF
+  (:func:`gsik.kernels.priority._without_dof`) and that direction dropped: ``Z^T P`` and ``N`` are turned by the
+  same reflection in ``O(rz n)`` and ``O(rz^2)`` and the level re-solved by an ``rz x rz`` Cholesky factorisation, not
+  factored from scratch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gsik._jit import njit
+from gsik.kernels import priority
+from gsik.kernels.pgs import _cholesky_solve
+from gsik.kernels.rows import axpy1, dot, dot1
+
+#: A posture factor is solved by its normal equations when its precision ``P = L^T L`` minus this fraction of its
+#: trace is still positive definite: its condition number is then below ``n / 1e-8`` and ``sigma_min(L)`` above
+#: ``1e-4`` times ``sqrt(trace P)`` (at least the largest row norm), so the pivoted QR's pivots are at least
+#: ``1e-4 / sqrt(n)`` of that row norm, five orders above :data:`gsik.priority.RANK_TOLERANCE`, and the normal
+#: equations lose no more than ~1e-8 of the step to rounding.
+WELL_CONDITIONED = 1e-8
+
+
+def normal_matrix(factor: np.ndarray) -> np.ndarray:
+    """``P = L^T L`` (n, n) of a posture factor ``L`` (k, n) whose level :func:`prioritized_step_posture` solves by
+    its normal equations: a square, finite, well-conditioned one (:data:`WELL_CONDITIONED`, one Cholesky test, no
+    decomposition: a conditioned prior sets a posture a frame) that is not diagonal; else (0, n): the pivoted QR's
+    level (a diagonal factor's runs over one column per DOF, about as cheap; a rank-deficient one needs the QR's
+    rank)."""
+    L = np.asarray(factor, dtype=float)
+    n = L.shape[1]
+    none = np.zeros((0, n))
+    if L.shape[0] != n or n == 0 or not np.all(np.isfinite(L)) or not np.any(L - np.diag(np.diag(L))):
+        return none
+    P = np.ascontiguousarray(L.T @ L)
+    try:
+        np.linalg.cholesky(P - (WELL_CONDITIONED * np.trace(P)) * np.eye(n))
+    except np.linalg.LinAlgError:
+        return none
+    return P
+
+
+@njit(cache=True)
+def prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, normal,
+                             dq):
+    """:func:`gsik.kernels.priority.prioritized_step` whose last level is a posture with the normal matrix
+    ``normal`` (n, n) (:func:`normal_matrix` of its rows, weights 1), solved by its normal equations; ``normal`` (0,
+    n): the pivoted QR's level, bit for bit :func:`~gsik.kernels.priority.prioritized_step`. Same arguments, status
+    and ``dq`` (n,) [rad] (to rounding)."""
+    posture = dampings.shape[0] - 1
+    if normal.shape[0] == 0 or posture < 0 or starts[posture + 1] - starts[posture] != normal.shape[0]:
+        return priority.prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                                         box_rel_tol, dq)
+    wk, last = priority.begin(starts, dampings, lo, dq)
+    status, z0, rz, identity = priority.solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol,
+                                                     box_tol, box_rel_tol, posture, last, dq)
+    if status != priority.OK:
+        return status
+    if rz > 0:
+        if identity:
+            priority._identity_into(wk.Zt, lo.shape[0])
+        _posture_level(wk, rows, errors, starts[posture], starts[posture + 1], normal, z0, rz, dq, lo, hi,
+                       dampings[posture], box_tol, box_rel_tol)
+    priority.clip(dq, lo, hi)
+    return priority.OK
+
+
+@njit(cache=True)
+def _posture_level(wk, rows, errors, start, stop, P, z0, rz, dq, lo, hi, damping, box_tol, box_rel_tol):
+    """The posture level's active-set loop on ``dq`` (and ``wk.locked``) in the free basis ``wk.Zt[z0:z0 + rz]``.
+
+    Buffers: ``g = L^T e`` in ``wk.beta``, ``Z^T P`` in ``wk.AT0[:rz, :n]`` (its row ``c`` for the basis' row
+    ``z0 + c``), ``N`` in ``wk.V``, the damped matrix in ``wk.G``, the right-hand side and solution in ``wk.y``."""
+    n = dq.shape[0]
+    g, ZP, N = wk.beta, wk.AT0, wk.V
+    g[:] = 0.0
+    for i in range(start, stop):
+        if errors[i] != 0.0:
+            axpy1(g, errors[i], rows, i, 0, n)
+    _basis_times(wk.Zt, z0, rz, P, ZP)
+    _gram(ZP, wk.Zt, z0, rz, N)
+    while True:
+        priority._into_box(dq, lo, hi, box_tol)
+        if not _damped_solve(wk, g, ZP, N, z0, rz, dq, damping):
+            return  # not numerically positive definite (only without damping, rounding at a singular P): no step
+        step = wk.step
+        step[:] = 0.0
+        for c in range(rz):
+            axpy1(step, wk.y[c], wk.Zt, z0 + c, 0, n)
+        for d in range(n):
+            if wk.locked[d]:
+                step[d] = 0.0
+        alpha, blocking = priority._largest_fraction(dq, step, lo, hi, box_tol, box_rel_tol)
+        if blocking < 0:
+            for d in range(n):
+                dq[d] += step[d]
+            return
+        for d in range(n):
+            dq[d] += alpha * step[d]
+        dq[blocking] = hi[blocking] if step[blocking] > 0.0 else lo[blocking]
+        wk.locked[blocking] = True
+        scale = priority._without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
+        if scale > 0.0:
+            priority._reflect_rows(ZP, n, rz, wk.u, scale, wk.w)
+            _turn(N, rz, wk.u, scale, wk.z)
+            z0 += 1
+            rz -= 1
+        if rz == 0:
+            return
+
+
+@njit(cache=True)
+def _basis_times(Zt, z0, rz, P, ZP):
+    """``ZP[:rz, :n] = Zt[z0:z0 + rz] @ P``: four rows a pass, each a sweep ``ZP[c] += Zt[z0 + c, d] * P[d]`` over
+    ``d`` in order, skipping the DOFs the pass' directions do not move (the basis' rows are sparse: the directions no
+    level above sees are unit rows, the others move only the DOFs of the chains those levels see)."""
+    n = P.shape[0]
+    c = 0
+    while c + 4 <= rz:
+        a0, a1, a2, a3 = ZP[c, :n], ZP[c + 1, :n], ZP[c + 2, :n], ZP[c + 3, :n]
+        a0[:] = 0.0
+        a1[:] = 0.0
+        a2[:] = 0.0
+        a3[:] = 0.0
+        for d in range(n):
+            z_0, z_1, z_2, z_3 = Zt[z0 + c, d], Zt[z0 + c + 1, d], Zt[z0 + c + 2, d], Zt[z0 + c + 3, d]
+            if z_0 == 0.0 and z_1 == 0.0 and z_2 == 0.0 and z_3 == 0.0:
+                continue  # a DOF none of the four directions moves (zeros add exactly nothing)
+            row = P[d]
+            for j in range(n):
+                r = row[j]
+                a0[j] += z_0 * r
+                a1[j] += z_1 * r
+                a2[j] += z_2 * r
+                a3[j] += z_3 * r
+        c += 4
+    for c in range(c, rz):
+        a = ZP[c, :n]
+        a[:] = 0.0
+        for d in range(n):
+            zc = Zt[z0 + c, d]
+            if zc != 0.0:
+                row = P[d]
+                for j in range(n):
+                    a[j] += zc * row[j]
+
+
+@njit(cache=True)
+def _gram(ZP, Zt, z0, rz, N):
+    """``N[:rz, :rz] = ZP[:rz] @ Zt[z0:z0 + rz]^T`` (``Z^T P Z``), symmetric: the lower triangle computed, mirrored."""
+    n = Zt.shape[1]
+    for c in range(rz):
+        for c2 in range(c + 1):
+            v = dot(ZP, c, Zt, z0 + c2, 0, n)
+            N[c, c2] = v
+            N[c2, c] = v
+
+
+@njit(cache=True)
+def _damped_solve(wk, g, ZP, N, z0, rz, dq, damping):
+    """``wk.y`` (rz,) solving ``(N + damping I) y = Z^T g - (Z^T P) dq``; False if that matrix is not numerically
+    positive definite."""
+    n = dq.shape[0]
+    G, y = wk.G, wk.y
+    for c in range(rz):
+        y[c] = dot1(wk.Zt, z0 + c, g, 0, n) - dot1(ZP, c, dq, 0, n)
+        for c2 in range(c + 1):
+            G[c, c2] = N[c, c2]
+        G[c, c] += damping
+    return _cholesky_solve(G, y, rz)
+
+
+@njit(cache=True)
+def _turn(N, rz, u, scale, w):
+    """``N[:rz - 1, :rz - 1] = (H N H)[1:, 1:]`` with ``H = I - scale u u^T`` (``u`` (rz,)): ``Z^T P Z`` after
+    :func:`gsik.kernels.priority._without_dof` turned the basis by ``H`` and dropped its first direction. ``w``:
+    (rz,) scratch."""
+    uw = 0.0
+    for c in range(rz):
+        s = 0.0
+        for c2 in range(rz):
+            s += N[c, c2] * u[c2]
+        w[c] = s
+        uw += u[c] * s
+    # H N H = N - u v^T - v u^T with v = scale N u - scale^2 (u^T N u) / 2 u
+    for c in range(rz):
+        w[c] = scale * w[c] - 0.5 * scale * scale * uw * u[c]
+    for c in range(1, rz):
+        for c2 in range(1, rz):
+            N[c - 1, c2 - 1] = N[c, c2] - u[c] * w[c2] - w[c] * u[c2]
