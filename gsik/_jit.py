@@ -189,6 +189,12 @@ def njit(*args, **kwargs):
     return lambda f: _compile(f, kwargs)
 
 
+def python_function(kernel):
+    """The plain Python function behind ``kernel`` (a kernel itself without numba or with ``NUMBA_DISABLE_JIT``):
+    for sizes worked out at set-up, where compiling would cost more than the call."""
+    return getattr(kernel, "py_func", kernel)
+
+
 def _compile(func, options: dict):
     if options.get("cache"):
         setattr(func, _KERNEL_MARK, True)  # stamped with the package's kernel sources (see the module's docstring)
@@ -201,4 +207,4 @@ def _compile(func, options: dict):
         return _numba_njit(**{**options, "cache": False})(func)
 
 
-__all__ = ["KernelCacheWarning", "njit", "temporary_cache_dir"]
+__all__ = ["KernelCacheWarning", "njit", "python_function", "temporary_cache_dir"]

@@ -1,10 +1,12 @@
 """gsik imports and solves wherever it is installed, even where numba's usual cache folders cannot be written."""
 
+import json
 import os
 import subprocess
 import sys
 import textwrap
 
+import numpy as np
 import pytest
 
 # Run in a fresh process: numba picks a cache folder per kernel when the kernel module is imported.
@@ -64,3 +66,36 @@ def test_read_only_install_without_home_imports_and_solves(tmp_path):
             os.chmod(os.path.join(root, name), 0o555)
     lines = _run(f"import sys; sys.path.insert(0, {str(site)!r})", tmp_path, HOME="/nonexistent", TMPDIR=str(tmp_path))
     assert lines[0].startswith("True")
+
+
+# The documented fallback: without numba's compiler (here ``NUMBA_DISABLE_JIT``) every kernel runs as plain Python. A
+# crouch as in the README, solved, then one controlled step.
+_SOLVE_BOTH_PATHS = """
+import json
+import gsik, numpy as np
+s = gsik.Solver(gsik.load_skeleton("biped"))
+t = {n: gsik.Target.from_transform(T) for n, T in s.effector_poses().items()}
+t.update({n: t[n].replace(position=t[n].position - [0.0, 0.0, 0.07]) for n in ("pelvis", "head", "right_hand")})
+t.update({n: t[n].replace(position_only=True) for n in ("left_hand", "right_hand")})
+plain = s.solve(t)
+s.set_posture(s.q.copy())
+t["left_hand"] = t["left_hand"].replace(position=t["left_hand"].position + [0.0, 0.03, 0.0])
+controlled = s.step(t)
+print(plain.converged, json.dumps(np.concatenate([plain.q, controlled.q]).tolist()))
+"""
+
+
+def _both_paths(tmp_path, **env) -> tuple[str, np.ndarray]:
+    environ = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")} | env
+    out = subprocess.run([sys.executable, "-c", _SOLVE_BOTH_PATHS], capture_output=True, text=True, env=environ,
+                         cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-2000:]
+    converged, q = out.stdout.split(" ", 1)
+    return converged, np.array(json.loads(q))
+
+
+def test_without_the_compiler_the_kernels_run_as_python_with_the_compiled_results(tmp_path):
+    converged, q_python = _both_paths(tmp_path, NUMBA_DISABLE_JIT="1")
+    assert converged == "True"
+    _, q_compiled = _both_paths(tmp_path)
+    np.testing.assert_allclose(q_python, q_compiled, atol=1e-9)

@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik._jit import njit
+from gsik._jit import njit, python_function
 
 # Indices into the statistics vector the kernels fill. O_FINITE: 1.0 if the angles and the used rows' errors a
 # step or solve leaves are all finite, else 0.0 (a step then leaves the angles as they were).
@@ -175,7 +175,7 @@ def _scratch_ends(n_frames, n, m, for_solve):
 
 def scratch_size(n_frames: int, n: int, m: int, for_solve: bool) -> int:
     """Float64 entries a :class:`Scratch` takes (what :func:`cut_scratch` needs of its buffer)."""
-    return _scratch_ends.py_func(n_frames, n, m, for_solve)[-1]
+    return python_function(_scratch_ends)(n_frames, n, m, for_solve)[-1]
 
 
 @njit(cache=True, inline="always")

@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gsik._jit import njit
+from gsik._jit import njit, python_function
 from gsik.kernels import N_STATS, KinematicModel, TargetArrays, Workspace, cut_scratch, scratch_size
 
 
@@ -98,7 +98,7 @@ def make_buffers(model: KinematicModel, root: int) -> Buffers:
     """Buffers for ``model`` with the IK root's frame ``root``: the model's arrays copied in, the targets'
     rotations the identity, everything else zero."""
     nf, n, m = model.frame_parent.shape[0], model.lower.shape[0], model.effector_frame.shape[0]
-    f_ends, i_ends = _float_ends.py_func(nf, n, m), _int_ends.py_func(nf, n, m)
+    f_ends, i_ends = python_function(_float_ends)(nf, n, m), python_function(_int_ends)(nf, n, m)
     floats = np.zeros(f_ends[-1] + scratch_size(nf, n, m, False))
     ints = np.zeros(i_ends[-1], dtype=np.int64)
     sizes = Sizes(nf, n, m, int(root))
@@ -117,14 +117,14 @@ def make_buffers(model: KinematicModel, root: int) -> Buffers:
 
 def target_rows_at(sizes: Sizes) -> tuple[int, int]:
     """Where in the float buffer the targets' positions (m, 3) and rotations (m, 3, 3) begin."""
-    ends = _float_ends.py_func(sizes.n_frames, sizes.n_dofs, sizes.n_effectors)
+    ends = python_function(_float_ends)(sizes.n_frames, sizes.n_dofs, sizes.n_effectors)
     return ends[6], ends[7]
 
 
 def python_views(buffers: Buffers) -> tuple[TargetArrays, np.ndarray, np.ndarray, Workspace]:
     """``(targets, W, q, ws)``: NumPy views of the float buffer, the same memory the compiled call cuts."""
     floats, (nf, n, m, _) = buffers.floats, buffers.sizes
-    q, err, stats, x, lam, R, p, tp, tR, tw, W = _float_ends.py_func(nf, n, m)[:11]
+    q, err, stats, x, lam, R, p, tp, tR, tw, W = python_function(_float_ends)(nf, n, m)[:11]
     targets = TargetArrays(floats[p:tp].reshape(m, 3), floats[tp:tR].reshape(m, 3, 3), floats[tR:tw].reshape(m, 6))
     ws = Workspace(floats[lam:R].reshape(nf, 3, 3), floats[R:p].reshape(nf, 3), floats[q:err].reshape(2, m),
                    floats[err:stats], floats[stats:x], floats[x:lam])
