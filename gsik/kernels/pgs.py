@@ -182,15 +182,21 @@ def bounded_solve(A, b, x, lo, hi, sweeps, stats):
     are then solved exactly by Cholesky and projected back into the box,
     a few rounds, and a last PGS pass settles the bounds. Plain PGS needs
     thousands of sweeps on the ill-conditioned systems near a solution;
-    this reaches the exact bounded minimiser in a few rounds.
+    this reaches the exact bounded minimiser in a few rounds. Its work arrays are made here
+    (:func:`bounded_solve_in` takes them from the caller).
     """
     n = b.shape[0]
+    bounded_solve_in(A, b, x, lo, hi, sweeps, stats, np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
+                     np.empty((n, n)), np.empty(n))
+
+
+@njit(cache=True)
+def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r):
+    """:func:`bounded_solve` with its work arrays given (contents unused, none read before it writes them): the
+    free set's indices ``free`` (n,) int64, its mask ``is_free`` (n,) bool, its system ``M`` (n, n) and right-hand
+    side ``r`` (n,). A frame step holds them between calls (four allocations fewer a linearisation)."""
     projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)
     total = int(stats[O_SWEEPS])
-    free = np.empty(n, dtype=np.int64)
-    is_free = np.zeros(n, dtype=np.bool_)
-    M = np.empty((n, n))
-    r = np.empty(n)
     for _ in range(8):
         nf = _free_set(A, b, x, lo, hi, free)
         if nf == 0:

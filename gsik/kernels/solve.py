@@ -23,7 +23,7 @@ from gsik._jit import njit
 from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_FINITE, O_ITERATIONS, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, KernelSettings, TargetArrays, make_scratch)
 from gsik.kernels.kinematics import linear_system
-from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
+from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
 from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors, _finite
 
 #: Share of an attempt's linearisations the positions-only phase may use.
@@ -59,7 +59,8 @@ def _trial(model, settings, targets, root, W, q, lam, ws, sc, pgs_stats):
     else:
         x[:] = 0.0
     if settings.subspace_minimization:
-        bounded_solve(sc.A_damped, sc.b, x, sc.lo, sc.hi, settings.sweeps, pgs_stats)
+        bounded_solve_in(sc.A_damped, sc.b, x, sc.lo, sc.hi, settings.sweeps, pgs_stats, sc.free_index, sc.free_mask,
+                         sc.free_M, sc.free_r)
     else:
         projected_gauss_seidel(sc.A_damped, sc.b, x, sc.lo, sc.hi, settings.sweeps, settings.residual_tolerance,
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, pgs_stats)
@@ -232,7 +233,7 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     ``max_iterations`` linearisations.
 
     Each linearisation solves ``(J^T W J + lam I) x = J^T W e`` within the
-    limits (:func:`~gsik.kernels.pgs.bounded_solve`, or PGS sweeps alone
+    limits (:func:`~gsik.kernels.pgs.bounded_solve_in`, or PGS sweeps alone
     without subspace minimisation), the step scaled to ``settings.max_step``.
     With ``settings.positions_first`` and an orientation target off by more
     than :data:`STAGE_ANGLE`, rounds of a

@@ -13,9 +13,8 @@ import math
 from gsik._jit import njit
 from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, O_COST, O_FINITE, O_ITERATIONS, O_RESIDUAL, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, make_scratch)
-from gsik.kernels.buffers import views
 from gsik.kernels.kinematics import effector_errors, frames_into, linear_system
-from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
+from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
 
 # With adaptive damping, lam may fall to this fraction of delta while steps succeed: near a
 # solution the steps come closer to Gauss-Newton and the last millimetre takes tens of frames, not hundreds
@@ -118,7 +117,8 @@ def _step_solve(model, settings, q, lam, ws, sc):
     else:
         x[:] = 0.0
     if settings.subspace_minimization:
-        bounded_solve(A, sc.b, x, lo, hi, settings.sweeps, ws.stats)
+        bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask, sc.free_M,
+                         sc.free_r)
     else:
         projected_gauss_seidel(A, sc.b, x, lo, hi, settings.sweeps, settings.residual_tolerance,
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, ws.stats)
@@ -164,18 +164,11 @@ def step(model, settings, targets, root, W, q, ws):
                      make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], False))
 
 
-@njit(cache=True)
-def step_buffers(settings, floats, ints, sizes):
-    """:func:`step` over the arrays of :func:`gsik.kernels.buffers.make_buffers` (its scratch there too): what
-    :class:`~gsik.solver.Solver` calls, two arrays to unbox rather than 23."""
-    model, targets, W, q, ws, sc = views(floats, ints, sizes)
-    return step_with(model, settings, targets, sizes.root, W, q, ws, sc)
-
-
 @njit(cache=True, inline="always")
 def step_with(model, settings, targets, root, W, q, ws, sc):
-    """:func:`step` with its scratch ``sc`` (a :class:`~gsik.kernels.Scratch`) given (inlined into both callers:
-    a call passing every field costs the named step a microsecond on the biped)."""
+    """:func:`step` with its scratch ``sc`` (a :class:`~gsik.kernels.Scratch`) given (inlined into both callers,
+    :func:`step` and :func:`gsik.kernels.plain.step_plain`: a call passing every field costs the named step a
+    microsecond on the biped)."""
     cost0 = effector_errors(ws.R, ws.p, model.effector_frame, targets.position, targets.rotation,
                             targets.row_weight, sc.e, ws.err, sc.M)
     sc.err_new[:, :] = ws.err
