@@ -3,15 +3,18 @@ previous paths bit for bit: the bounded solve whatever its held work arrays hold
 called with the named arrays; ``Solver.solve`` (its first attempt in one compiled call returning the statistics) as
 the attempts' general path, the state it leaves included (a next step and solve agree too)."""
 
+import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 import gsik
 from gsik import Target, kernels
+from gsik._jit import njit
 from gsik.io.urdf_skeleton import skeleton_from_urdf
 from gsik.kernels import O_RESIDUAL, buffers, pgs, plain
 from gsik.kernels import step as step_kernels
@@ -45,6 +48,17 @@ def test_bounded_solve_in_is_bounded_solve_whatever_its_work_arrays_hold(n, seed
                          np.ones(n, dtype=np.bool_), np.full((n, n), garbage), np.full(n, garbage))
     assert np.array_equal(x_a, x_b)
     assert np.array_equal(st_a, st_b)
+
+
+@njit(cache=False)
+def _norm_as_summed(x):
+    return math.sqrt(np.sum(x * x))
+
+
+@settings(max_examples=60, deadline=None)
+@given(x=hnp.arrays(np.float64, st.integers(0, 40), elements=st.floats(-1e6, 1e6)))
+def test_norm_of_is_the_summed_norm_it_replaced(x):
+    assert step_kernels.norm_of(x) == _norm_as_summed(x)
 
 
 @pytest.mark.parametrize("paper", [False, True])

@@ -24,7 +24,7 @@ from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_FINITE
                           O_STEP_NORM, O_SWEEPS, STALLED, KernelSettings, TargetArrays, make_scratch)
 from gsik.kernels.kinematics import linear_system
 from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
-from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors, _finite
+from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors, _finite, norm_of, take_frames
 
 #: Share of an attempt's linearisations the positions-only phase may use.
 POSITION_PHASE_SHARE = 0.3
@@ -80,8 +80,7 @@ def _trial(model, settings, targets, root, W, q, lam, ws, sc, pgs_stats):
 def _take(q, ws, sc):
     """The trial becomes the state."""
     q[:] = sc.q_new
-    ws.R[:, :, :] = sc.R_new
-    ws.p[:, :] = sc.p_new
+    take_frames(ws.R, ws.p, sc.R_new, sc.p_new)
     ws.err[:, :] = sc.err_new
     sc.x_prev[:] = sc.x_solve
 
@@ -127,7 +126,7 @@ def _predicted_gain(A, b, x):
 @njit(cache=True, inline="always")
 def _stalls(settings, sc, taken, settled):
     """True if a linearisation's step ends the phase: not taken, settled, or shorter than the stall tolerance."""
-    return not taken or settled or math.sqrt(np.sum(sc.x_solve * sc.x_solve)) < settings.stall_tolerance
+    return not taken or settled or norm_of(sc.x_solve) < settings.stall_tolerance
 
 
 @njit(cache=True, inline="always")
@@ -260,5 +259,5 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     st[O_ITERATIONS] = counts[0]
     st[O_SWEEPS] = counts[1]
     st[O_COST] = cost
-    st[O_STEP_NORM] = math.sqrt(np.sum(sc.x_solve * sc.x_solve))
+    st[O_STEP_NORM] = norm_of(sc.x_solve)
     st[O_FINITE] = _finite(q, ws.err, targets.row_weight)
