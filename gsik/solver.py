@@ -29,6 +29,7 @@ from gsik.kernels.kinematics import forward_kinematics
 from gsik.kinematics import Topology, kinematic_model, topology
 from gsik.result import (_STATUSES, SolveResult, Status, errors_by_effector, max_orientation_error,  # noqa: F401
                          max_position_error)  # re-exported: gsik.solver's names as before the split
+from gsik.result_arrays import ResultArrays
 from gsik.rotations import transform
 from gsik.skeleton import Skeleton
 from gsik.solver_targets import MAX_PRIORITY_LEVELS, MAX_TARGETS, TargetSetting  # noqa: F401  (re-exported)
@@ -138,12 +139,13 @@ class Solver(TargetSetting, AttemptPolicy):
         self._state = self._buffers.floats[: sk.n_dofs + 2 * m]
         n = sk.n_dofs  # where q, the position errors and the orientation errors lie in _state
         self._result_slices = (slice(0, n), slice(n, n + m), slice(n + m, n + 2 * m))
+        self._result_arrays = ResultArrays(self._state, self._result_slices)
         self._q[:] = q
         self._q_before = np.empty(sk.n_dofs)  # a prioritised step's starting angles, to undo a non-finite one
         self._ws.lam[0] = lam
         self._fk = kernels.compiled_entry(forward_kinematics, self._model, self._q, self._topo.root_frame, self._W,
                                           self._ws.R, self._ws.p)
-        self._plain = self._move_row = self._fast_rows = self._row_bytes = None  # at first use
+        self._plain = self._moves = self._fast_rows = self._row_bytes = None  # at first use
         self._row_of = {name: k for k, name in enumerate(self._topo.effector_names)}
         self._layout = None  # the targets' layout the packed rows hold: None packs every row again
         self._refresh_frames()
@@ -287,10 +289,9 @@ class Solver(TargetSetting, AttemptPolicy):
         run = self._plain or self._plain_inputs()
         finite, status, iterations, sweeps, residual, step_norm = run[0](run[2])
         if finite:  # the result _new_result makes, inline: a frame's one method call fewer
-            out = self._state.copy()
-            q, pos, ori = self._result_slices
-            return _new_tuple(SolveResult, (out[q], _STATUSES[status], iterations, sweeps, residual,
-                                            self._topo.effector_names, out[pos], out[ori], step_norm, 1))
+            out = self._result_arrays.take()
+            return _new_tuple(SolveResult, (out[2], _STATUSES[status], iterations, sweeps, residual,
+                                            self._topo.effector_names, out[3], out[4], step_norm, 1))
         # stats[O_FINITE] 0: the kernel did not take the step, the angles are the last finite ones
         self._refuse_non_finite(None, self._ws.stats)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
@@ -319,12 +320,11 @@ class Solver(TargetSetting, AttemptPolicy):
     def _new_result(self, status: int, iterations: int, sweeps: int, residual: float, step_norm: float,
                     attempts: int) -> SolveResult:
         """A single-level result: the current angles and errors, with these statistics (``status`` a code)."""
-        # q and the (2, m) errors share one buffer: one copy, three views the caller owns.
-        out = self._state.copy()
-        q, pos, ori = self._result_slices  # slice objects made once: cheaper than slicing with literals
+        # q and the (2, m) errors: views of one copy, a dropped result's when the caller holds none of it.
+        out = self._result_arrays.take()
         # tuple.__new__: every field given, so NamedTuple's own __new__ (a Python call with defaults) is skipped.
-        return _new_tuple(SolveResult, (out[q], _STATUSES[status], iterations, sweeps, residual,
-                                        self._topo.effector_names, out[pos], out[ori], step_norm, attempts))
+        return _new_tuple(SolveResult, (out[2], _STATUSES[status], iterations, sweeps, residual,
+                                        self._topo.effector_names, out[3], out[4], step_norm, attempts))
 
     def set_root(self, name: str) -> None:
         """Make the joint or site ``name`` the IK root; the pose does not move.
