@@ -61,15 +61,17 @@ def test_a_kept_result_never_changes_when_the_solver_moves_on(arm, steps):
     assert len({r.q.tobytes() for r in kept}) == len(kept)  # each made from its own state
 
 
-@pytest.mark.parametrize("keep", ["q", "position_errors", "orientation_errors", "slice", "base", "memoryview",
-                                  "tuple"])
+#: What a caller may keep of a result it drops.
+_PARTS = {"q": lambda r: r.q, "position_errors": lambda r: r.position_errors,
+          "orientation_errors": lambda r: r.orientation_errors, "slice": lambda r: r.q[2:5], "base": lambda r: r.q.base,
+          "memoryview": lambda r: memoryview(r.position_errors), "tuple": tuple}
+
+
+@pytest.mark.parametrize("keep", list(_PARTS))
 def test_any_kept_part_of_a_dropped_result_never_changes(arm, keep):
     solver, start = _tracking(arm)
     r = _move(solver, start, 1)
-    part = {"q": lambda: r.q, "position_errors": lambda: r.position_errors,
-            "orientation_errors": lambda: r.orientation_errors, "slice": lambda: r.q[2:5],
-            "base": lambda: r.q.base, "memoryview": lambda: memoryview(r.position_errors),
-            "tuple": lambda: tuple(r)}[keep]()
+    part = _PARTS[keep](r)
     before = bytes(part) if keep != "tuple" else tuple(a.copy() for a in (part[0], part[6], part[7]))
     del r
     gc.collect()
