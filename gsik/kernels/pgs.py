@@ -126,6 +126,15 @@ def _cholesky_solve(M, r, nf):
 
 
 @njit(cache=True, inline="always")
+def _strictly_inside(x, lo, hi):
+    """True if every ``x[i]`` lies strictly between ``lo[i]`` and ``hi[i]``."""
+    for i in range(x.shape[0]):
+        if not (lo[i] < x[i] and x[i] < hi[i]):
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
 def _free_set(A, b, x, lo, hi, free):
     """Indices into ``free`` of the unknowns off their bounds or pulled inward by the gradient; returns their count."""
     nf = 0
@@ -191,12 +200,26 @@ def bounded_solve(A, b, x, lo, hi, sweeps, stats):
 
 
 @njit(cache=True)
-def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r):
+def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_inside=False):
     """:func:`bounded_solve` with its work arrays given (contents unused, none read before it writes them): the
     free set's indices ``free`` (n,) int64, its mask ``is_free`` (n,) bool, its system ``M`` (n, n) and right-hand
-    side ``r`` (n,). A frame step holds them between calls (four allocations fewer a linearisation)."""
-    projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)
-    total = int(stats[O_SWEEPS])
+    side ``r`` (n,). A frame step holds them between calls (four allocations fewer a linearisation).
+
+    With ``until_inside`` the first sweeps (up to ``sweeps``) stop at one that leaves every unknown strictly inside
+    its bounds: they only guess which unknowns the exact solve holds at a bound, and that guess is then "none",
+    so the exact solve is the whole system's whatever ``x`` the sweeps left (the same numbers as after all of
+    them, while the further sweeps would not touch a bound either; one that does is corrected by the free-set
+    rounds)."""
+    if until_inside:
+        total = 0
+        for _ in range(sweeps):
+            projected_gauss_seidel(A, b, x, lo, hi, 1, 0.0, 0.0, x, 0.0, stats)
+            total += 1
+            if _strictly_inside(x, lo, hi):
+                break
+    else:
+        projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)
+        total = int(stats[O_SWEEPS])
     for _ in range(8):
         nf = _free_set(A, b, x, lo, hi, free)
         if nf == 0:

@@ -139,7 +139,7 @@ def _step_solve(model, settings, q, lam, ws, sc):
         x[:] = 0.0
     if settings.subspace_minimization:
         bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask, sc.free_M,
-                         sc.free_r)
+                         sc.free_r, True)
     else:
         projected_gauss_seidel(A, sc.b, x, lo, hi, settings.sweeps, settings.residual_tolerance,
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, ws.stats)
