@@ -209,7 +209,8 @@ def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_
     its bounds: they only guess which unknowns the exact solve holds at a bound, and that guess is then "none",
     so the exact solve is the whole system's whatever ``x`` the sweeps left (the same numbers as after all of
     them, while the further sweeps would not touch a bound either; one that does is corrected by the free-set
-    rounds)."""
+    rounds); and when that exact solve's answer lies inside the bounds, the three closing sweeps (which would
+    only move its rounding) are skipped, the residual then computed from the answer."""
     if until_inside:
         total = 0
         for _ in range(sweeps):
@@ -220,6 +221,7 @@ def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_
     else:
         projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)
         total = int(stats[O_SWEEPS])
+    whole = False  # the last exact solve was the whole system's, its answer inside the bounds
     for _ in range(8):
         nf = _free_set(A, b, x, lo, hi, free)
         if nf == 0:
@@ -228,6 +230,13 @@ def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_
         if not _cholesky_solve(M, r, nf):
             break
         if _place_free(r, x, lo, hi, free, nf):
+            whole = nf == b.shape[0]
             break
+    if until_inside and whole:
+        # The unconstrained minimiser, inside the box: the last sweeps would only move its rounding.
+        stats[O_SWEEPS] = total
+        stats[O_RESIDUAL] = _projected_residual(A, b, x, lo, hi)
+        stats[O_UPDATE] = 0.0
+        return
     projected_gauss_seidel(A, b, x, lo, hi, 3, 0.0, 0.0, x, 0.0, stats)
     stats[O_SWEEPS] = total + int(stats[O_SWEEPS])
