@@ -203,25 +203,24 @@ def bounded_solve(A, b, x, lo, hi, sweeps, stats):
 def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_inside=False):
     """:func:`bounded_solve` with its work arrays given (contents unused, none read before it writes them): the
     free set's indices ``free`` (n,) int64, its mask ``is_free`` (n,) bool, its system ``M`` (n, n) and right-hand
-    side ``r`` (n,). A frame step holds them between calls (four allocations fewer a linearisation).
+    side ``r`` (n,). A frame step holds them between calls (four allocations fewer a linearisation). Returns True
+    when ``x`` holds the answer.
 
     With ``until_inside`` the first sweeps (up to ``sweeps``) stop at one that leaves every unknown strictly inside
-    its bounds: they only guess which unknowns the exact solve holds at a bound, and that guess is then "none",
-    so the exact solve is the whole system's whatever ``x`` the sweeps left (the same numbers as after all of
-    them, while the further sweeps would not touch a bound either; one that does is corrected by the free-set
-    rounds); and when that exact solve's answer lies inside the bounds, the three closing sweeps (which would
-    only move its rounding) are skipped, the residual then computed from the answer."""
+    its bounds: they only guess which unknowns the exact solve holds at a bound, and that guess is then "none".
+    If the whole system's exact answer lies inside the bounds it is the answer (the box's minimiser: the sweeps
+    after it would only move its rounding); if not, returns False with ``x`` spoilt, and the caller solves again
+    from its start without ``until_inside`` (the same numbers as always where a bound is active)."""
+    total = 0
     if until_inside:
-        total = 0
         for _ in range(sweeps):
             projected_gauss_seidel(A, b, x, lo, hi, 1, 0.0, 0.0, x, 0.0, stats)
             total += 1
             if _strictly_inside(x, lo, hi):
-                break
+                return _whole_inside(A, b, x, lo, hi, stats, total, free, is_free, M, r)
     else:
         projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)
         total = int(stats[O_SWEEPS])
-    whole = False  # the last exact solve was the whole system's, its answer inside the bounds
     for _ in range(8):
         nf = _free_set(A, b, x, lo, hi, free)
         if nf == 0:
@@ -230,13 +229,23 @@ def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_
         if not _cholesky_solve(M, r, nf):
             break
         if _place_free(r, x, lo, hi, free, nf):
-            whole = nf == b.shape[0]
             break
-    if until_inside and whole:
-        # The unconstrained minimiser, inside the box: the last sweeps would only move its rounding.
-        stats[O_SWEEPS] = total
-        stats[O_RESIDUAL] = _projected_residual(A, b, x, lo, hi)
-        stats[O_UPDATE] = 0.0
-        return
     projected_gauss_seidel(A, b, x, lo, hi, 3, 0.0, 0.0, x, 0.0, stats)
     stats[O_SWEEPS] = total + int(stats[O_SWEEPS])
+    return True
+
+
+@njit(cache=True, inline="always")
+def _whole_inside(A, b, x, lo, hi, stats, sweeps, free, is_free, M, r):
+    """The whole system's exact answer into ``x`` (clamped); True if it lies inside the bounds, then with the
+    ``sweeps`` done, its projected residual and no last change in ``stats``."""
+    n = b.shape[0]
+    for i in range(n):
+        free[i] = i
+    _reduced_system(A, b, x, free, n, is_free, M, r)
+    if not (_cholesky_solve(M, r, n) and _place_free(r, x, lo, hi, free, n)):
+        return False
+    stats[O_SWEEPS] = sweeps
+    stats[O_RESIDUAL] = _projected_residual(A, b, x, lo, hi)
+    stats[O_UPDATE] = 0.0
+    return True

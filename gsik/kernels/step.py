@@ -124,6 +124,16 @@ def _idle(ws, sc, cost, finite):
 
 
 @njit(cache=True, inline="always")
+def _start(x, x_prev, lo, hi, warm_start):
+    """The sweeps' start in ``x``: the previous frame's step ``x_prev`` within ``lo``, ``hi`` (warm), else 0."""
+    if warm_start:
+        for i in range(x.shape[0]):
+            x[i] = min(max(x_prev[i], lo[i]), hi[i])
+    else:
+        x[:] = 0.0
+
+
+@njit(cache=True, inline="always")
 def _step_solve(model, settings, q, lam, ws, sc):
     """Solve ``(A + lam I) x = b`` within the limits and the step bound, warm-started from ``ws.x``."""
     n = q.shape[0]
@@ -132,14 +142,16 @@ def _step_solve(model, settings, q, lam, ws, sc):
         A[i, i] += lam
     _bounds(q, model.lower, model.upper, settings.max_step, lo, hi)
     sc.x_prev[:] = x
-    if settings.warm_start:
-        for i in range(n):
-            x[i] = min(max(x[i], lo[i]), hi[i])
-    else:
-        x[:] = 0.0
+    _start(x, sc.x_prev, lo, hi, settings.warm_start)
     if settings.subspace_minimization:
-        bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask, sc.free_M,
-                         sc.free_r, True)
+        if not bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask,
+                                sc.free_M, sc.free_r, True):
+            # A bound is active: from the same start with all the sweeps (the step's numbers as they always were).
+            early = ws.stats[O_SWEEPS]
+            _start(x, sc.x_prev, lo, hi, settings.warm_start)
+            bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask, sc.free_M,
+                             sc.free_r)
+            ws.stats[O_SWEEPS] += early
     else:
         projected_gauss_seidel(A, sc.b, x, lo, hi, settings.sweeps, settings.residual_tolerance,
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, ws.stats)
