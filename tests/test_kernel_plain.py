@@ -50,6 +50,36 @@ def test_bounded_solve_in_is_bounded_solve_whatever_its_work_arrays_hold(n, seed
     assert np.array_equal(st_a, st_b)
 
 
+@settings(max_examples=80, deadline=None)
+@given(n=st.integers(1, 8), seed=st.integers(0, 2 ** 32 - 1), sweeps=st.integers(1, 12))
+def test_bounded_solve_stopped_early_is_the_whole_answer_inside_the_box_or_says_not(n, seed, sweeps):
+    """``until_inside``: sweeps stopped early give the whole system's answer when it lies inside the box (a step's
+    usual case, the box's minimiser), False when it does not (the step then solves again without it), and the
+    full path's numbers when no sweep left every unknown inside."""
+    rng = np.random.default_rng(seed)
+    J = rng.normal(size=(n + 2, n))
+    A = J.T @ J + rng.uniform(1e-3, 1e-1) * np.eye(n)
+    b = rng.normal(scale=rng.uniform(0.01, 1.0), size=n)
+    half = rng.uniform(0.01, 2.0, n)
+    lo, hi = -half * rng.uniform(0.0, 1.0, n), half
+    x0 = np.clip(rng.normal(scale=0.1, size=n), lo, hi)
+    x_full, x_early = x0.copy(), x0.copy()
+    st_full, st_early = np.zeros(kernels.N_STATS), np.zeros(kernels.N_STATS)
+    pgs.bounded_solve(A, b, x_full, lo, hi, sweeps, st_full)
+    done = pgs.bounded_solve_in(A, b, x_early, lo, hi, sweeps, st_early, np.empty(n, dtype=np.int64),
+                                np.empty(n, dtype=np.bool_), np.empty((n, n)), np.empty(n), True)
+    whole = np.linalg.solve(A, b)
+    margin = 1e-9 * (1.0 + np.abs(whole))
+    if not done:
+        assert not np.all((lo + margin < whole) & (whole < hi - margin))
+    elif st_early[kernels.O_SWEEPS] < st_full[kernels.O_SWEEPS]:  # stopped early: the whole answer, inside
+        assert np.all((lo <= x_early) & (x_early <= hi))
+        assert np.allclose(x_early, whole, rtol=1e-9, atol=1e-12)
+        assert st_early[O_RESIDUAL] <= 1e-9 * (1.0 + np.abs(b).max())
+    else:
+        assert np.array_equal(x_early, x_full)
+
+
 @njit(cache=False)
 def _norm_as_summed(x):
     return math.sqrt(np.sum(x * x))

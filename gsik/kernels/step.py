@@ -20,6 +20,10 @@ from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
 # solution the steps come closer to Gauss-Newton and the last millimetre takes tens of frames, not hundreds
 # (measured on gsik.anim.scenarios; 0.01 settles faster still but tracks a fast wave worse).
 ADAPTIVE_FLOOR = 0.1
+#: Up to this many DOFs (a limb), a frame step's bounded solve stops its first sweeps early when no bound is touched
+#: (:func:`gsik.kernels.pgs.bounded_solve_in`'s ``until_inside``): a wrong guess costs a few sweeps and a small
+#: Cholesky again. On a whole body (the 30-DOF biped, Table 1 with the defaults) one costs ~8 µs: not used there.
+EARLY_STOP_DOFS = 8
 
 
 @njit(cache=True)
@@ -145,7 +149,7 @@ def _step_solve(model, settings, q, lam, ws, sc):
     _start(x, sc.x_prev, lo, hi, settings.warm_start)
     if settings.subspace_minimization:
         if not bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask,
-                                sc.free_M, sc.free_r, True):
+                                sc.free_M, sc.free_r, n <= EARLY_STOP_DOFS):
             # A bound is active: from the same start with all the sweeps (the step's numbers as they always were).
             early = ws.stats[O_SWEEPS]
             _start(x, sc.x_prev, lo, hi, settings.warm_start)
