@@ -9,7 +9,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from gsik import control, kernels
-from gsik.kernels import O_COST, O_FINITE, O_ITERATIONS, O_STATUS, O_STEP_NORM, O_SWEEPS
+from gsik.kernels import O_COST, O_FINITE, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS
 from gsik.kernels import solve as solve_kernels
 from gsik.result import _STATUSES, SolveResult, Status
 from gsik.rotations import matrix_from_rotvec, rotvec_from_matrix
@@ -78,13 +78,38 @@ class AttemptPolicy:
         self._stepped = False
         if self._settled is not None and self._settled[0] == self._reach_key():
             return self._solve_result(self._settled[1], 1)  # nothing further can do better: no work
-        stats, attempts = self._attempts()
+        first = None
+        if not self._is_controlled:
+            first = self._plain_first_attempt()
+            if type(first) is SolveResult:
+                return first
+        stats, attempts = self._attempts(first)
         self._ws.x[:] = 0.0
         self._ws.lam[0] = self._settings.damping
         self._remember_settled(stats)
         # What the next solve may start from warm: this one's pose under this posture, if it converged.
         self._warm = (self._q.tobytes(), self._posture) if _status(stats) is Status.CONVERGED else None
         return self._solve_result(stats, attempts)
+
+    def _refuse_non_finite(self, before: np.ndarray | None, stats: np.ndarray) -> None:
+        """Undo a step or attempt that left a non-finite angle or error (``stats[O_FINITE]`` 0; status
+        :attr:`Status.REFUSED`): back to the angles ``before`` (None: the kernel left them), so the solver is
+        never poisoned and the pose stays the last finite one."""
+        if before is not None:
+            self._q[:] = before
+        self._ws.x[:] = 0.0
+        self._ws.lam[0] = self._settings.damping
+        self._refresh_frames()
+        frames = self._topo.effector_frame
+        tp, tR, row_w = self._packed
+        err = self._ws.err  # the restored pose's errors, where a target asks for them (inf if it overflows)
+        with np.errstate(over="ignore", invalid="ignore"):
+            err[0] = np.where(row_w[:, 0] > 0, np.linalg.norm(tp - self._ws.p[frames], axis=1), 0.0)
+            cos = (np.einsum("kij,kij->k", tR, self._ws.R[frames]) - 1.0) * 0.5
+            err[1] = np.where(row_w[:, 3] > 0, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
+        stats[O_STATUS] = Status.REFUSED
+        stats[O_COST] = stats[O_RESIDUAL] = np.inf
+        stats[O_STEP_NORM] = 0.0
 
     def _solve_result(self, stats: np.ndarray, attempts: int) -> SolveResult:
         """The result of a solve whose best attempt's statistics are ``stats``."""
@@ -93,13 +118,34 @@ class AttemptPolicy:
                                         float(stats[O_STEP_NORM]), attempts, self._control_report(self._stepped))
         return self._result(stats, O_COST, attempts)
 
-    def _attempts(self) -> tuple[np.ndarray, int]:
-        """``(statistics of the best attempt, attempts made)``: the first attempt from the current angles, then
-        the further ones the settings and its outcome call for; the best one is left as the state."""
-        restarts = self._settings.restarts > 0
+    def _plain_first_attempt(self) -> SolveResult | tuple[np.ndarray, np.ndarray]:
+        """A single-level solve's first attempt from the current angles, in one compiled call that returns its
+        statistics (:func:`gsik.kernels.plain.solve_plain`). Converged: the solve's result, the state left as
+        :meth:`solve` leaves it. Else ``(its start (n_dofs,) [rad], a copy of its statistics)`` for
+        :meth:`_attempts` to go on from (a refused attempt already undone, as :meth:`_kernel_solve` does)."""
         start = self._q.copy()
+        run = self._plain or self._plain_inputs()
+        finite, status, iterations, sweeps, cost, step_norm = run[1](run[2], self._settings.max_iterations, True)
+        if finite and status == kernels.CONVERGED:
+            self._settled = None
+            self._warm = (self._q.tobytes(), self._posture)
+            return self._new_result(status, iterations, sweeps, cost, step_norm, 1)
+        stats = self._ws.stats
+        if not finite:
+            self._refuse_non_finite(np.clip(start, self._skeleton.lower, self._skeleton.upper), stats)
+        return start, stats.copy()
+
+    def _attempts(self, first: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, int]:
+        """``(statistics of the best attempt, attempts made)``: the first attempt from the current angles (or
+        ``first``, ``(its start, its statistics)``, already made), then the further ones the settings and its
+        outcome call for; the best one is left as the state."""
+        restarts = self._settings.restarts > 0
         self._work_done = [0, 0]
-        stats = self._solve_from(start)
+        if first is None:
+            start = self._q.copy()
+            stats = self._solve_from(start)
+        else:
+            start, stats = first[0], self._count(first[1])
         attempts = 1
         if _status(stats) is not Status.CONVERGED and restarts:
             stats, attempts = self._restart(start, stats)
@@ -236,20 +282,16 @@ class AttemptPolicy:
         if q0 is self._q:
             q0 = q0.copy()  # kept: a refused attempt goes back to it
         self._q[:] = q0  # the kernel clamps it into the limits (cheaper there than np.clip here)
-        solve, inputs = self._solve_call or self._solve_inputs()
-        solve(*inputs, iterations, self._ws)
+        run = self._plain or self._plain_inputs()
+        run[1](run[2], iterations, False)
         stats = self._ws.stats
         if not stats[O_FINITE]:
             self._refuse_non_finite(np.clip(q0, self._skeleton.lower, self._skeleton.upper), stats)
         return stats.copy()
 
-    def _solve_inputs(self) -> tuple:
-        """``(solve kernel, its arguments before the iterations and the workspace)``: persistent arrays, built once
-        per configuration as a step's (:meth:`~gsik.solver.Solver._kernel_inputs`)."""
-        settings = self._settings.kernel_settings(for_solve=True)._replace(positions_first=self._stages_positions())
-        inputs = (self._model, settings, self._packed, self._topo.root_frame, self._W, self._q)
-        self._solve_call = (kernels.compiled_entry(solve_kernels.solve, *inputs, 0, self._ws), inputs)
-        return self._solve_call
+    def _solve_settings(self) -> kernels.KernelSettings:
+        """The settings a solve's attempt reads (:func:`gsik.kernels.solve.solve`)."""
+        return self._settings.kernel_settings(for_solve=True)._replace(positions_first=self._stages_positions())
 
     def _stages_positions(self) -> bool:
         """True if a solve's attempts meet the positions first: ``positions_first`` is on and the skeleton has

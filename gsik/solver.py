@@ -19,15 +19,17 @@ from gsik import control, kernels
 from gsik.attempts import SETTLED_AGREEMENT, SETTLED_REPEATS, AttemptPolicy  # noqa: F401  (re-exported)
 from gsik.balance import center_of_mass
 from gsik.errors import SolverError, choices, show_value
-from gsik.kernels import O_COST, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS
+from gsik.kernels import O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS
 from gsik.kernels import solve as solve_kernels  # noqa: F401  (gsik.solver.solve_kernels, as before)
 from gsik.kernels import buffers as kernel_buffers
+from gsik.kernels import plain as plain_kernels
 from gsik.kernels import step as step_kernels
 from gsik.kernels import step_inputs
 from gsik.kernels.kinematics import forward_kinematics
 from gsik.kinematics import Topology, kinematic_model, topology
 from gsik.result import (_STATUSES, SolveResult, Status, errors_by_effector, max_orientation_error,  # noqa: F401
                          max_position_error)  # re-exported: gsik.solver's names as before the split
+from gsik.result_arrays import ResultArrays
 from gsik.rotations import transform
 from gsik.skeleton import Skeleton
 from gsik.solver_targets import MAX_PRIORITY_LEVELS, MAX_TARGETS, TargetSetting  # noqa: F401  (re-exported)
@@ -137,12 +139,13 @@ class Solver(TargetSetting, AttemptPolicy):
         self._state = self._buffers.floats[: sk.n_dofs + 2 * m]
         n = sk.n_dofs  # where q, the position errors and the orientation errors lie in _state
         self._result_slices = (slice(0, n), slice(n, n + m), slice(n + m, n + 2 * m))
+        self._result_arrays = ResultArrays(self._state, self._result_slices)
         self._q[:] = q
         self._q_before = np.empty(sk.n_dofs)  # a prioritised step's starting angles, to undo a non-finite one
         self._ws.lam[0] = lam
         self._fk = kernels.compiled_entry(forward_kinematics, self._model, self._q, self._topo.root_frame, self._W,
                                           self._ws.R, self._ws.p)
-        self._inputs = self._solve_call = self._move_row = self._fast_rows = self._row_bytes = None  # at first use
+        self._plain = self._moves = self._fast_rows = self._row_bytes = None  # at first use
         self._row_of = {name: k for k, name in enumerate(self._topo.effector_names)}
         self._layout = None  # the targets' layout the packed rows hold: None packs every row again
         self._refresh_frames()
@@ -220,7 +223,7 @@ class Solver(TargetSetting, AttemptPolicy):
     def configure(self, **changes) -> None:
         """Change settings by name (validated); unknown names raise :class:`SolverError`."""
         self._settings = self._make_settings(self._settings, changes)
-        self._inputs = self._solve_call = None  # the kernels' cached calls: made again at first use
+        self._plain = None  # the kernels' cached calls: made again at first use
         self._ws.lam[0] = self._settings.damping
         self._layout = None  # the orientation weight may have changed: pack every row again
         self._pack_targets()
@@ -283,37 +286,24 @@ class Solver(TargetSetting, AttemptPolicy):
             self._q[:] = self._q_before  # the prioritised step went non-finite: undo it as the plain one is undone
             self._refresh_frames()
             return self._control_result(Status.REFUSED, 1, math.inf, 0.0, 1)
-        step, inputs = self._inputs or self._step_inputs()
-        if not step(*inputs):  # stats[O_FINITE] 0: the kernel did not take the step, the angles are the last finite
-            self._refuse_non_finite(None, self._ws.stats)
+        run = self._plain or self._plain_inputs()
+        finite, status, iterations, sweeps, residual, step_norm = run[0](run[2])
+        if finite:  # the result _new_result makes, inline: a frame's one method call fewer
+            out = self._result_arrays.take()
+            return _new_tuple(SolveResult, (out[2], _STATUSES[status], iterations, sweeps, residual,
+                                            self._topo.effector_names, out[3], out[4], step_norm, 1))
+        # stats[O_FINITE] 0: the kernel did not take the step, the angles are the last finite ones
+        self._refuse_non_finite(None, self._ws.stats)
         return self._result(self._ws.stats, O_RESIDUAL, 1)
 
-    def _refuse_non_finite(self, before: np.ndarray | None, stats: np.ndarray) -> None:
-        """Undo a step or attempt that left a non-finite angle or error (``stats[O_FINITE]`` 0; status
-        :attr:`Status.REFUSED`): back to the angles ``before`` (None: the kernel left them), so the solver is
-        never poisoned and the pose stays the last finite one."""
-        if before is not None:
-            self._q[:] = before
-        self._ws.x[:] = 0.0
-        self._ws.lam[0] = self._settings.damping
-        self._refresh_frames()
-        frames = self._topo.effector_frame
-        tp, tR, row_w = self._packed
-        err = self._ws.err  # the restored pose's errors, where a target asks for them (inf if it overflows)
-        with np.errstate(over="ignore", invalid="ignore"):
-            err[0] = np.where(row_w[:, 0] > 0, np.linalg.norm(tp - self._ws.p[frames], axis=1), 0.0)
-            cos = (np.einsum("kij,kij->k", tR, self._ws.R[frames]) - 1.0) * 0.5
-            err[1] = np.where(row_w[:, 3] > 0, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
-        stats[O_STATUS] = Status.REFUSED
-        stats[O_COST] = stats[O_RESIDUAL] = np.inf
-        stats[O_STEP_NORM] = 0.0
-
-    def _step_inputs(self) -> tuple:
-        """``(step kernel over the buffers, its arguments)``: persistent arrays, so this is built once per
-        configuration."""
-        inputs = (self._settings.kernel_settings(), *self._buffers)
-        self._inputs = (kernels.compiled_entry(step_kernels.step_buffers, *inputs), inputs)
-        return self._inputs
+    def _plain_inputs(self) -> tuple:
+        """``(compiled step_plain, compiled solve_plain, their PlainInputs)`` (:mod:`gsik.kernels.plain`) over the
+        buffers: persistent arrays, so this is built once per configuration."""
+        inputs = plain_kernels.make_plain_inputs(self._settings.kernel_settings(), self._solve_settings(),
+                                                 *self._buffers)
+        self._plain = (kernels.compiled_entry(plain_kernels.step_plain, inputs),
+                       kernels.compiled_entry(plain_kernels.solve_plain, inputs, 0, False), inputs)
+        return self._plain
 
     def _kernel_inputs(self) -> tuple:
         """``(step kernel, its named arguments)`` over the same memory (Table 1's kernel columns time it)."""
@@ -322,14 +312,19 @@ class Solver(TargetSetting, AttemptPolicy):
         return kernels.compiled_entry(step_kernels.step, *inputs), inputs
 
     def _result(self, st: np.ndarray, residual_index: int, attempts: int) -> SolveResult:
-        # q and the (2, m) errors share one buffer: one copy, three views the caller owns.
-        out = self._state.copy()
-        q, pos, ori = self._result_slices  # slice objects made once: cheaper than slicing with literals
+        """The result of the statistics ``st`` (N_STATS,) a kernel wrote, its residual ``st[residual_index]``."""
         stats = st.tolist()
+        return self._new_result(int(stats[O_STATUS]), int(stats[O_ITERATIONS]), int(stats[O_SWEEPS]),
+                                stats[residual_index], stats[O_STEP_NORM], attempts)
+
+    def _new_result(self, status: int, iterations: int, sweeps: int, residual: float, step_norm: float,
+                    attempts: int) -> SolveResult:
+        """A single-level result: the current angles and errors, with these statistics (``status`` a code)."""
+        # q and the (2, m) errors: views of one copy, a dropped result's when the caller holds none of it.
+        out = self._result_arrays.take()
         # tuple.__new__: every field given, so NamedTuple's own __new__ (a Python call with defaults) is skipped.
-        return _new_tuple(SolveResult, (out[q], _STATUSES[int(stats[O_STATUS])], int(stats[O_ITERATIONS]),
-                                        int(stats[O_SWEEPS]), stats[residual_index], self._topo.effector_names,
-                                        out[pos], out[ori], stats[O_STEP_NORM], attempts))
+        return _new_tuple(SolveResult, (out[2], _STATUSES[status], iterations, sweeps, residual,
+                                        self._topo.effector_names, out[3], out[4], step_norm, attempts))
 
     def set_root(self, name: str) -> None:
         """Make the joint or site ``name`` the IK root; the pose does not move.

@@ -11,15 +11,14 @@ import numpy as np
 from gsik import kernels
 from gsik.errors import TargetError, choices
 from gsik.kernels.buffers import target_rows_at
-from gsik.kernels.targets import WRITTEN, move_row_at
+from gsik.kernels.targets import WRITTEN, move_pose_at, move_position_at
 from gsik.targets import PACK3_INTO, PACK9_INTO, Target, checked_position, checked_rotation
 
 #: Most enabled targets a solver takes at once (a tracked 100-joint clip uses about 200).
 MAX_TARGETS = 512
 #: Most distinct priority levels among them.
 MAX_PRIORITY_LEVELS = 16
-#: A moved target's rotation argument for "keep the row's rotation" (shape (0, 0)), and float64.
-_KEEP = np.zeros((0, 0))
+#: float64 (native byte order): the dtype a moved target's arrays need for the compiled write.
 _F8 = np.dtype(np.float64)
 #: Arrays of any layout (a column of a transform is strided): what the compiled entry is made for.
 _ANY_VECTOR, _ANY_MATRIX = np.zeros((3, 2))[:, 0], np.zeros((3, 6))[:, ::2]
@@ -102,16 +101,17 @@ class TargetSetting:
         """
         rows = self._fast_rows
         at = (self._make_fast_rows() if rows is None else rows).get(name)  # None: not on the single level's rows
-        if at is not None and type(position) is np.ndarray and position.dtype is _F8 and position.shape == (3,):
-            # The usual frame: float arrays that pass Target's checks as they are go straight into the row.
-            move, floats, p_at, R_at = at
+        if at is not None and type(position) is np.ndarray and position.dtype is _F8 and position.ndim == 1:
+            # The usual frame: float arrays that pass Target's checks as they are go straight into the row (the
+            # compiled call checks their lengths, finiteness and bounds; Python only what unboxing needs).
+            position_at, pose_at, floats, p_at, R_at = at
             if orientation is None:
-                if move(position, _KEEP, floats, p_at, R_at) == WRITTEN:
+                if position_at(position, floats, p_at) == WRITTEN:
                     if name not in self._moved:
                         self._moved[name] = (None, False)
                     return
-            elif type(orientation) is np.ndarray and orientation.dtype is _F8 and orientation.shape == (3, 3) \
-                    and move(position, orientation, floats, p_at, R_at) == WRITTEN:
+            elif type(orientation) is np.ndarray and orientation.dtype is _F8 and orientation.ndim == 2 \
+                    and pose_at(position, orientation, floats, p_at, R_at) == WRITTEN:
                 self._moved[name] = _TURNED
                 return
         self._move_checked(name, position, orientation)
@@ -142,16 +142,16 @@ class TargetSetting:
         return rows, places
 
     def _make_fast_rows(self) -> dict:
-        """``{target name: (compiled move_row_at, float buffer, position's index, rotation's index)}`` of the targets
-        :meth:`move_target` writes straight into the kernels' rows (none on the prioritised path); made again
-        after the targets' packing changes (``_fast_rows`` None)."""
+        """``{target name: (compiled move_position_at, compiled move_pose_at, float buffer, position's index,
+        rotation's index)}`` of the targets :meth:`move_target` writes straight into the kernels' rows (none on the
+        prioritised path); made again after the targets' packing changes (``_fast_rows`` None)."""
         if self._is_controlled:
             self._fast_rows = {}
             return self._fast_rows
         floats = self._buffers.floats
-        move = self._move_row or self._make_move_row()
+        moves = self._moves or self._make_moves()
         p0, R0 = target_rows_at(self._buffers.sizes)
-        self._fast_rows = {name: (move, floats, p0 + 3 * k, R0 + 9 * k)
+        self._fast_rows = {name: (*moves, floats, p0 + 3 * k, R0 + 9 * k)
                            for name in self._target_map if (k := self._row_of.get(name)) is not None}
         return self._fast_rows
 
@@ -177,10 +177,13 @@ class TargetSetting:
             PACK9_INTO(self._packed.rotation, 72 * k, *rows)
         self._moved[name] = (q, True) if rows is not None else self._moved.get(name, (None, False))
 
-    def _make_move_row(self):
-        """:func:`gsik.kernels.targets.move_row`'s compiled entry (any layout of the given arrays), kept."""
-        self._move_row = kernels.compiled_entry(move_row_at, _ANY_VECTOR, _ANY_MATRIX, self._buffers.floats, 0, 0)
-        return self._move_row
+    def _make_moves(self) -> tuple:
+        """:func:`gsik.kernels.targets.move_position_at` and ``move_pose_at`` compiled for arrays of any layout (a
+        transform's column is strided), kept."""
+        floats = self._buffers.floats
+        self._moves = (kernels.compiled_entry(move_position_at, _ANY_VECTOR, floats, 0),
+                       kernels.compiled_entry(move_pose_at, _ANY_VECTOR, _ANY_MATRIX, floats, 0, 0))
+        return self._moves
 
     def _check_targets(self, targets: Mapping[str, Target | None]) -> tuple[dict[str, Target], tuple]:
         """``(the enabled targets, their layout)``: the layout ``((name, weight, position_only, priority), ...)``

@@ -83,7 +83,7 @@ class Target:
         _set(self, "position", p)
         _set(self, "_orientation", q)
         _set(self, "rotation", R)
-        _set(self, "weight", _weight(weight))
+        _set(self, "weight", weight if type(weight) is float and 0.0 <= weight <= MAX_WEIGHT else _weight(weight))
         _set(self, "position_only", bool(position_only))
         _set(self, "enabled", bool(enabled))
         _set(self, "priority", priority if type(priority) is int and priority >= 0 else _priority(priority))

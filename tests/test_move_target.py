@@ -129,6 +129,48 @@ def test_bad_moves_raise_one_target_error_and_change_nothing(arm):
     assert free.targets == {}
 
 
+@pytest.mark.parametrize("position, orientation", [
+    (np.array([np.nan, 0.0, 0.0]), None), (np.array([0.0, np.inf, 0.0]), None), (np.array([1.0, 2.0]), None),
+    (np.zeros(4), None), (np.zeros(0), None), (np.array([2e6, 0.0, 0.0]), None), (np.zeros((3, 1)), None),
+    (np.array([1, 2], dtype=np.int64), "matrix"), (np.array([np.nan, 0, 0], dtype=np.float32), None),
+    (None, np.full((3, 3), np.nan)),
+    (None, 2.0 * np.eye(3)), (None, -np.eye(3)), (None, np.eye(4)), (None, np.eye(3)[:2]), (None, np.zeros((3, 3, 1))),
+    (np.zeros((2, 3))[:, 0], None), (np.zeros((6, 2))[::2, 1], 2.0 * np.eye(3))])
+def test_bad_float_arrays_raise_as_the_same_values_given_as_lists(arm, position, orientation):
+    """A float64 array takes the compiled write, which checks its length, finiteness and bounds itself: what it
+    refuses raises the TargetError the same values raise as lists, and nothing changes."""
+    solver = gsik.Solver(arm, q0=BENT)
+    start = solver.effector_poses()["hand"]
+    solver.set_target("hand", Target.from_transform(start))
+    before, rows = solver.targets, solver._buffers.floats.copy()
+    position = start[:3, 3].copy() if position is None else position
+    orientation = start[:3, :3].copy() if isinstance(orientation, str) else orientation
+    with pytest.raises(gsik.TargetError) as as_lists:
+        solver.move_target("hand", position.tolist(), None if orientation is None else orientation.tolist())
+    with pytest.raises(gsik.TargetError) as as_arrays:
+        solver.move_target("hand", position, orientation)
+    assert str(as_arrays.value) == str(as_lists.value)
+    assert type(as_arrays.value) is type(as_lists.value)
+    assert solver.targets == before
+    assert np.array_equal(solver._buffers.floats, rows, equal_nan=True)
+
+
+def test_strided_float_arrays_move_as_their_copies(arm):
+    """A transform's column and corner (strided views) go through the compiled write as contiguous copies do."""
+    strided, copied = gsik.Solver(arm, q0=BENT), gsik.Solver(arm, q0=BENT)
+    start = strided.effector_poses()["hand"]
+    for solver in (strided, copied):
+        solver.set_target("hand", Target.from_transform(start))
+    for T in _circle(start, 8):
+        strided.move_target("hand", T[:3, 3], T[:3, :3])
+        copied.move_target("hand", T[:3, 3].copy(), np.ascontiguousarray(T[:3, :3]))
+        _same(strided.step(), copied.step())
+        strided.move_target("hand", T[:3, 3])
+        copied.move_target("hand", T[:3, 3].copy())
+        _same(strided.step(), copied.step())
+    assert strided.targets == copied.targets
+
+
 def test_a_single_chain_solves_without_staging_positions_first(arm, biped, rng):
     """positions_first stages only on a skeleton with several effectors: the arm's solve is the unstaged one,
     the whole body's is still the staged one (and staging changes some whole-body solve)."""

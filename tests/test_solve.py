@@ -66,14 +66,15 @@ def test_a_settled_reach_is_forgotten_when_targets_start_or_settings_change(bipe
 
 def test_reported_work_is_the_sum_over_all_attempts(biped, monkeypatch):
     solver = gsik.Solver(biped, restarts=3)
-    kernel = gsik.solver.solve_kernels.solve
+    kernel = gsik.solver.plain_kernels.solve_plain  # every single-level attempt's compiled call
     done = []
 
-    def counting(model, settings, targets, root, W, q, max_iterations, ws):
-        kernel(model, settings, targets, root, W, q, max_iterations, ws)
-        done.append((int(ws.stats[O_ITERATIONS]), int(ws.stats[O_SWEEPS])))
+    def counting(inputs, max_iterations, finish):
+        out = kernel(inputs, max_iterations, finish)
+        done.append((int(solver._ws.stats[O_ITERATIONS]), int(solver._ws.stats[O_SWEEPS])))
+        return out
 
-    monkeypatch.setattr(gsik.solver.solve_kernels, "solve", counting)
+    monkeypatch.setattr(gsik.solver.plain_kernels, "solve_plain", counting)
     targets = unreachable_targets(solver)
     targets["right_hand"] = Target([3.0, -2.0, 2.5])
     r = solver.solve(targets)

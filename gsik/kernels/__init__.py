@@ -127,6 +127,8 @@ class Scratch(NamedTuple):
         b, lo, hi, x_prev, q_new: (n_dofs,); x_solve: (n_dofs,) a solve's step (solve only).
         R_new, p_new, err_new: frames and errors at a trial ``q``. M: (3, 3).
         v: (2, n_dofs, 6) one effector's compact Jacobian block and its weighted copy.
+        free_M: (n_dofs, n_dofs), free_r: (n_dofs,), free_index: (n_dofs,) int64, free_mask: (n_dofs,) bool: the
+            work arrays of :func:`~gsik.kernels.pgs.bounded_solve_in` (the free set's system, its indices, its mask).
     """
 
     e: np.ndarray
@@ -143,6 +145,10 @@ class Scratch(NamedTuple):
     err_new: np.ndarray
     M: np.ndarray
     v: np.ndarray
+    free_M: np.ndarray
+    free_r: np.ndarray
+    free_index: np.ndarray
+    free_mask: np.ndarray
 
 
 def make_workspace(n_frames: int, n_dofs: int, n_effectors: int, err: np.ndarray | None = None) -> Workspace:
@@ -170,7 +176,9 @@ def _scratch_ends(n_frames, n, m, for_solve):
     en = pn + 2 * m
     M = en + 9
     v = M + 12 * n
-    return a, ad, e, b, lo, hi, xp, qn, xs, Rn, pn, en, M, v
+    fM = v + n * n
+    fr = fM + n
+    return a, ad, e, b, lo, hi, xp, qn, xs, Rn, pn, en, M, v, fM, fr
 
 
 def scratch_size(n_frames: int, n: int, m: int, for_solve: bool) -> int:
@@ -180,20 +188,23 @@ def scratch_size(n_frames: int, n: int, m: int, for_solve: bool) -> int:
 
 @njit(cache=True, inline="always")
 def cut_scratch(buf, n_frames, n, m, for_solve):
-    """A :class:`Scratch` cut from ``buf`` (at least :func:`scratch_size` float64 entries; contents unused)."""
+    """A :class:`Scratch` cut from ``buf`` (at least :func:`scratch_size` float64 entries; contents unused); its two
+    integer and boolean work arrays are allocated."""
     k = n if for_solve else 0
-    a, ad, e, b, lo, hi, xp, qn, xs, Rn, pn, en, M, v = _scratch_ends(n_frames, n, m, for_solve)
+    a, ad, e, b, lo, hi, xp, qn, xs, Rn, pn, en, M, v, fM, fr = _scratch_ends(n_frames, n, m, for_solve)
     return Scratch(buf[ad:e], buf[:a].reshape((n, n)), buf[a:ad].reshape((k, k)), buf[e:b], buf[b:lo], buf[lo:hi],
                    buf[hi:xp], buf[xp:qn], buf[qn:xs], buf[xs:Rn].reshape((n_frames, 3, 3)),
                    buf[Rn:pn].reshape((n_frames, 3)), buf[pn:en].reshape((2, m)), buf[en:M].reshape((3, 3)),
-                   buf[M:v].reshape((2, n, 6)))
+                   buf[M:v].reshape((2, n, 6)), buf[v:fM].reshape((n, n)), buf[fM:fr], np.empty(n, dtype=np.int64),
+                   np.zeros(n, dtype=np.bool_))
 
 
 @njit(cache=True)
 def make_scratch(n_frames, n, m, for_solve):
     """A :class:`Scratch` (uninitialised) for ``n`` DOFs and ``m`` effectors; ``for_solve`` adds a solve's buffers.
 
-    One allocation, cut into the fields: each further allocation would cost as much as the cutting. The ends are
+    One float allocation, cut into the fields (and the two work arrays :func:`cut_scratch` allocates): each further
+    allocation would cost as much as the cutting. The ends are
     plain integers (an array of sizes and its cumulative sum would be two allocations more: 0.3-0.5 µs of a step).
     """
     return cut_scratch(np.empty(_scratch_ends(n_frames, n, m, for_solve)[-1]), n_frames, n, m, for_solve)

@@ -1,11 +1,12 @@
-"""The plain step's arrays in two buffers, behind the named contracts: a call from Python unboxes two arrays.
+"""The plain step's arrays in two buffers, behind the named contracts, cut once (:mod:`gsik.kernels.plain`).
 
 Passing the :class:`~gsik.kernels.KinematicModel`, :class:`~gsik.kernels.TargetArrays`, the root's transform, the
 angles and the :class:`~gsik.kernels.Workspace` field by field makes numba unbox 23 arrays a call (about 0.1 µs
 each: half of an idle frame's kernel call on a chain). Here they live in one float64 buffer and one int64 buffer
-(:func:`make_buffers`); :func:`views` cuts the same named contracts out of them inside the compiled call, and the
-:class:`~gsik.solver.Solver` holds NumPy views of the same memory, so nothing is copied between them. The step's
-scratch (:class:`~gsik.kernels.Scratch`) is cut from the float buffer too: no allocation a frame.
+(:func:`make_buffers`); :func:`views` cuts the same named contracts out of them in compiled code, once per
+configuration (:mod:`gsik.kernels.plain` holds them), and the :class:`~gsik.solver.Solver` holds NumPy views of the
+same memory, so nothing is copied between them. The step's scratch (:class:`~gsik.kernels.Scratch`) is cut from the
+float buffer too: no allocation a frame.
 
 Float buffer, in order: ``q`` (n), ``err`` (2, m) (adjacent: a result copies both at once), ``stats`` (N_STATS),
 ``x`` (n), ``lam`` (1), ``R`` (nf, 3, 3), ``p`` (nf, 3), the targets' ``position`` (m, 3), ``rotation`` (m, 3, 3),

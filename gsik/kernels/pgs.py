@@ -126,6 +126,15 @@ def _cholesky_solve(M, r, nf):
 
 
 @njit(cache=True, inline="always")
+def _strictly_inside(x, lo, hi):
+    """True if every ``x[i]`` lies strictly between ``lo[i]`` and ``hi[i]``."""
+    for i in range(x.shape[0]):
+        if not (lo[i] < x[i] and x[i] < hi[i]):
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
 def _free_set(A, b, x, lo, hi, free):
     """Indices into ``free`` of the unknowns off their bounds or pulled inward by the gradient; returns their count."""
     nf = 0
@@ -182,15 +191,36 @@ def bounded_solve(A, b, x, lo, hi, sweeps, stats):
     are then solved exactly by Cholesky and projected back into the box,
     a few rounds, and a last PGS pass settles the bounds. Plain PGS needs
     thousands of sweeps on the ill-conditioned systems near a solution;
-    this reaches the exact bounded minimiser in a few rounds.
+    this reaches the exact bounded minimiser in a few rounds. Its work arrays are made here
+    (:func:`bounded_solve_in` takes them from the caller).
     """
     n = b.shape[0]
-    projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)
-    total = int(stats[O_SWEEPS])
-    free = np.empty(n, dtype=np.int64)
-    is_free = np.zeros(n, dtype=np.bool_)
-    M = np.empty((n, n))
-    r = np.empty(n)
+    bounded_solve_in(A, b, x, lo, hi, sweeps, stats, np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
+                     np.empty((n, n)), np.empty(n))
+
+
+@njit(cache=True)
+def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_inside=False):
+    """:func:`bounded_solve` with its work arrays given (contents unused, none read before it writes them): the
+    free set's indices ``free`` (n,) int64, its mask ``is_free`` (n,) bool, its system ``M`` (n, n) and right-hand
+    side ``r`` (n,). A frame step holds them between calls (four allocations fewer a linearisation). Returns True
+    when ``x`` holds the answer.
+
+    With ``until_inside`` the first sweeps (up to ``sweeps``) stop at one that leaves every unknown strictly inside
+    its bounds: they only guess which unknowns the exact solve holds at a bound, and that guess is then "none".
+    If the whole system's exact answer lies inside the bounds it is the answer (the box's minimiser: the sweeps
+    after it would only move its rounding); if not, returns False with ``x`` spoilt, and the caller solves again
+    from its start without ``until_inside`` (the same numbers as always where a bound is active)."""
+    total = 0
+    if until_inside:
+        for _ in range(sweeps):
+            projected_gauss_seidel(A, b, x, lo, hi, 1, 0.0, 0.0, x, 0.0, stats)
+            total += 1
+            if _strictly_inside(x, lo, hi):
+                return _whole_inside(A, b, x, lo, hi, stats, total, free, is_free, M, r)
+    else:
+        projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)
+        total = int(stats[O_SWEEPS])
     for _ in range(8):
         nf = _free_set(A, b, x, lo, hi, free)
         if nf == 0:
@@ -202,3 +232,20 @@ def bounded_solve(A, b, x, lo, hi, sweeps, stats):
             break
     projected_gauss_seidel(A, b, x, lo, hi, 3, 0.0, 0.0, x, 0.0, stats)
     stats[O_SWEEPS] = total + int(stats[O_SWEEPS])
+    return True
+
+
+@njit(cache=True, inline="always")
+def _whole_inside(A, b, x, lo, hi, stats, sweeps, free, is_free, M, r):
+    """The whole system's exact answer into ``x`` (clamped); True if it lies inside the bounds, then with the
+    ``sweeps`` done, its projected residual and no last change in ``stats``."""
+    n = b.shape[0]
+    for i in range(n):
+        free[i] = i
+    _reduced_system(A, b, x, free, n, is_free, M, r)
+    if not (_cholesky_solve(M, r, n) and _place_free(r, x, lo, hi, free, n)):
+        return False
+    stats[O_SWEEPS] = sweeps
+    stats[O_RESIDUAL] = _projected_residual(A, b, x, lo, hi)
+    stats[O_UPDATE] = 0.0
+    return True

@@ -23,8 +23,8 @@ from gsik._jit import njit
 from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_FINITE, O_ITERATIONS, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, KernelSettings, TargetArrays, make_scratch)
 from gsik.kernels.kinematics import linear_system
-from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
-from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors, _finite
+from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
+from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors, _finite, norm_of, take_frames
 
 #: Share of an attempt's linearisations the positions-only phase may use.
 POSITION_PHASE_SHARE = 0.3
@@ -59,7 +59,8 @@ def _trial(model, settings, targets, root, W, q, lam, ws, sc, pgs_stats):
     else:
         x[:] = 0.0
     if settings.subspace_minimization:
-        bounded_solve(sc.A_damped, sc.b, x, sc.lo, sc.hi, settings.sweeps, pgs_stats)
+        bounded_solve_in(sc.A_damped, sc.b, x, sc.lo, sc.hi, settings.sweeps, pgs_stats, sc.free_index, sc.free_mask,
+                         sc.free_M, sc.free_r)
     else:
         projected_gauss_seidel(sc.A_damped, sc.b, x, sc.lo, sc.hi, settings.sweeps, settings.residual_tolerance,
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, pgs_stats)
@@ -79,8 +80,7 @@ def _trial(model, settings, targets, root, W, q, lam, ws, sc, pgs_stats):
 def _take(q, ws, sc):
     """The trial becomes the state."""
     q[:] = sc.q_new
-    ws.R[:, :, :] = sc.R_new
-    ws.p[:, :] = sc.p_new
+    take_frames(ws.R, ws.p, sc.R_new, sc.p_new)
     ws.err[:, :] = sc.err_new
     sc.x_prev[:] = sc.x_solve
 
@@ -126,7 +126,7 @@ def _predicted_gain(A, b, x):
 @njit(cache=True, inline="always")
 def _stalls(settings, sc, taken, settled):
     """True if a linearisation's step ends the phase: not taken, settled, or shorter than the stall tolerance."""
-    return not taken or settled or math.sqrt(np.sum(sc.x_solve * sc.x_solve)) < settings.stall_tolerance
+    return not taken or settled or norm_of(sc.x_solve) < settings.stall_tolerance
 
 
 @njit(cache=True, inline="always")
@@ -232,7 +232,7 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     ``max_iterations`` linearisations.
 
     Each linearisation solves ``(J^T W J + lam I) x = J^T W e`` within the
-    limits (:func:`~gsik.kernels.pgs.bounded_solve`, or PGS sweeps alone
+    limits (:func:`~gsik.kernels.pgs.bounded_solve_in`, or PGS sweeps alone
     without subspace minimisation), the step scaled to ``settings.max_step``.
     With ``settings.positions_first`` and an orientation target off by more
     than :data:`STAGE_ANGLE`, rounds of a
@@ -259,5 +259,5 @@ def solve(model, settings, targets, root, W, q, max_iterations, ws):
     st[O_ITERATIONS] = counts[0]
     st[O_SWEEPS] = counts[1]
     st[O_COST] = cost
-    st[O_STEP_NORM] = math.sqrt(np.sum(sc.x_solve * sc.x_solve))
+    st[O_STEP_NORM] = norm_of(sc.x_solve)
     st[O_FINITE] = _finite(q, ws.err, targets.row_weight)

@@ -13,14 +13,17 @@ import math
 from gsik._jit import njit
 from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, O_COST, O_FINITE, O_ITERATIONS, O_RESIDUAL, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, make_scratch)
-from gsik.kernels.buffers import views
 from gsik.kernels.kinematics import effector_errors, frames_into, linear_system
-from gsik.kernels.pgs import bounded_solve, projected_gauss_seidel
+from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
 
 # With adaptive damping, lam may fall to this fraction of delta while steps succeed: near a
 # solution the steps come closer to Gauss-Newton and the last millimetre takes tens of frames, not hundreds
 # (measured on gsik.anim.scenarios; 0.01 settles faster still but tracks a fast wave worse).
 ADAPTIVE_FLOOR = 0.1
+#: Up to this many DOFs (a limb), a frame step's bounded solve stops its first sweeps early when no bound is touched
+#: (:func:`gsik.kernels.pgs.bounded_solve_in`'s ``until_inside``): a wrong guess costs a few sweeps and a small
+#: Cholesky again. On a whole body (the 30-DOF biped, Table 1 with the defaults) one costs ~8 µs: not used there.
+EARLY_STOP_DOFS = 8
 
 
 @njit(cache=True)
@@ -52,6 +55,27 @@ def _finite(q, err, row_w):
         if row_w[k, 3] > 0.0:
             total += err[1, k] * err[1, k]
     return math.isfinite(total)
+
+
+@njit(cache=True, inline="always")
+def norm_of(x):
+    """``sqrt(sum(x ** 2))`` of ``x`` (n,), summed in order: the number ``math.sqrt(np.sum(x * x))`` gives, without
+    its temporary array."""
+    total = 0.0
+    for i in range(x.shape[0]):
+        total += x[i] * x[i]
+    return math.sqrt(total)
+
+
+@njit(cache=True, inline="always")
+def take_frames(R, p, R_new, p_new):
+    """``R[:] = R_new``, ``p[:] = p_new`` (frames (nf, 3, 3) and (nf, 3)) as loops: numba's three-dimensional slice
+    assignment costs 0.2 µs more on a chain's nine frames."""
+    for i in range(R.shape[0]):
+        for a in range(3):
+            p[i, a] = p_new[i, a]
+            for b in range(3):
+                R[i, a, b] = R_new[i, a, b]
 
 
 @njit(cache=True)
@@ -104,6 +128,16 @@ def _idle(ws, sc, cost, finite):
 
 
 @njit(cache=True, inline="always")
+def _start(x, x_prev, lo, hi, warm_start):
+    """The sweeps' start in ``x``: the previous frame's step ``x_prev`` within ``lo``, ``hi`` (warm), else 0."""
+    if warm_start:
+        for i in range(x.shape[0]):
+            x[i] = min(max(x_prev[i], lo[i]), hi[i])
+    else:
+        x[:] = 0.0
+
+
+@njit(cache=True, inline="always")
 def _step_solve(model, settings, q, lam, ws, sc):
     """Solve ``(A + lam I) x = b`` within the limits and the step bound, warm-started from ``ws.x``."""
     n = q.shape[0]
@@ -112,13 +146,16 @@ def _step_solve(model, settings, q, lam, ws, sc):
         A[i, i] += lam
     _bounds(q, model.lower, model.upper, settings.max_step, lo, hi)
     sc.x_prev[:] = x
-    if settings.warm_start:
-        for i in range(n):
-            x[i] = min(max(x[i], lo[i]), hi[i])
-    else:
-        x[:] = 0.0
+    _start(x, sc.x_prev, lo, hi, settings.warm_start)
     if settings.subspace_minimization:
-        bounded_solve(A, sc.b, x, lo, hi, settings.sweeps, ws.stats)
+        if not bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask,
+                                sc.free_M, sc.free_r, n <= EARLY_STOP_DOFS):
+            # A bound is active: from the same start with all the sweeps (the step's numbers as they always were).
+            early = ws.stats[O_SWEEPS]
+            _start(x, sc.x_prev, lo, hi, settings.warm_start)
+            bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask, sc.free_M,
+                             sc.free_r)
+            ws.stats[O_SWEEPS] += early
     else:
         projected_gauss_seidel(A, sc.b, x, lo, hi, settings.sweeps, settings.residual_tolerance,
                                settings.update_tolerance, sc.x_prev, settings.stall_tolerance, ws.stats)
@@ -164,18 +201,11 @@ def step(model, settings, targets, root, W, q, ws):
                      make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], False))
 
 
-@njit(cache=True)
-def step_buffers(settings, floats, ints, sizes):
-    """:func:`step` over the arrays of :func:`gsik.kernels.buffers.make_buffers` (its scratch there too): what
-    :class:`~gsik.solver.Solver` calls, two arrays to unbox rather than 23."""
-    model, targets, W, q, ws, sc = views(floats, ints, sizes)
-    return step_with(model, settings, targets, sizes.root, W, q, ws, sc)
-
-
 @njit(cache=True, inline="always")
 def step_with(model, settings, targets, root, W, q, ws, sc):
-    """:func:`step` with its scratch ``sc`` (a :class:`~gsik.kernels.Scratch`) given (inlined into both callers:
-    a call passing every field costs the named step a microsecond on the biped)."""
+    """:func:`step` with its scratch ``sc`` (a :class:`~gsik.kernels.Scratch`) given (inlined into both callers,
+    :func:`step` and :func:`gsik.kernels.plain.step_plain`: a call passing every field costs the named step a
+    microsecond on the biped)."""
     cost0 = effector_errors(ws.R, ws.p, model.effector_frame, targets.position, targets.rotation,
                             targets.row_weight, sc.e, ws.err, sc.M)
     sc.err_new[:, :] = ws.err
@@ -195,8 +225,7 @@ def step_with(model, settings, targets, root, W, q, ws, sc):
     finite = not accepted or _finite(sc.q_new, sc.err_new, targets.row_weight)
     if accepted and finite:
         q[:] = sc.q_new
-        ws.R[:, :, :] = sc.R_new
-        ws.p[:, :] = sc.p_new
+        take_frames(ws.R, ws.p, sc.R_new, sc.p_new)
         ws.err[:, :] = sc.err_new
     _step_stats(settings, targets, ws, cost, accepted)
     ws.stats[O_FINITE] = finite
@@ -206,10 +235,7 @@ def step_with(model, settings, targets, root, W, q, ws, sc):
 @njit(cache=True, inline="always")
 def _step_stats(settings, targets, ws, cost, accepted):
     """Cost, step size and status of a step into ``ws.stats``."""
-    step_norm = 0.0
-    for i in range(ws.x.shape[0]):
-        step_norm += ws.x[i] * ws.x[i]
-    step_norm = math.sqrt(step_norm)
+    step_norm = norm_of(ws.x)
     st = ws.stats
     st[O_COST] = cost
     st[O_STEP_NORM] = step_norm

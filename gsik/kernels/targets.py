@@ -11,10 +11,23 @@ WRITTEN, NOT_WRITTEN = 0, 1
 
 
 @njit(cache=True)
-def move_row_at(position, rotation, floats, p_at, R_at):
-    """:func:`move_row` into a flat float64 buffer (:mod:`gsik.kernels.buffers`): the row's position at
-    ``floats[p_at:p_at + 3]``, its rotation row by row at ``floats[R_at:R_at + 9]``; :class:`gsik.Target`'s bounds
-    (:data:`gsik.targets.MAX_COORDINATE`, :data:`gsik.targets.EXACT_ROTATION`). Three arrays to unbox, not four."""
+def move_position_at(position, floats, p_at):
+    """A target's position moved to ``position`` [m] in a flat float64 buffer (:mod:`gsik.kernels.buffers`), its
+    row's position at ``floats[p_at:p_at + 3]``: :func:`move_row` without a rotation, also checking the length (a
+    one-dimensional float64 array of any length and layout: its caller checks only type, dtype and dimensions).
+    :data:`NOT_WRITTEN` unless it has three coordinates within :class:`gsik.Target`'s bounds. Two arrays to unbox."""
+    if position.shape[0] != 3:
+        return NOT_WRITTEN
+    return move_row(position, floats[:0].reshape((0, 3)), MAX_COORDINATE, EXACT_ROTATION,
+                    floats[p_at:p_at + 3].reshape((1, 3)), floats[:0].reshape((0, 3, 3)), 0)
+
+
+@njit(cache=True)
+def move_pose_at(position, rotation, floats, p_at, R_at):
+    """:func:`move_position_at` with a rotation matrix ``rotation`` (any two-dimensional float64 array: one not
+    (3, 3) is refused), written row by row at ``floats[R_at:R_at + 9]``."""
+    if position.shape[0] != 3 or rotation.shape[0] != 3 or rotation.shape[1] != 3:
+        return NOT_WRITTEN
     return move_row(position, rotation, MAX_COORDINATE, EXACT_ROTATION, floats[p_at:p_at + 3].reshape((1, 3)),
                     floats[R_at:R_at + 9].reshape((1, 3, 3)), 0)
 
@@ -24,8 +37,7 @@ def move_row(position, rotation, max_coordinate, exact, tp, tR, k):
     """Write ``position`` (3,) [m] and ``rotation`` (3, 3) into row ``k`` of the packed targets ``tp`` (m, 3) and
     ``tR`` (m, 3, 3) if they pass :class:`gsik.Target`'s checks as they are: every coordinate within
     ``max_coordinate`` (so finite), the rotation's columns orthonormal within ``exact`` (where ``Target`` keeps
-    a matrix as given) and its determinant positive. A ``rotation`` of shape (0, 0) leaves the row's rotation.
-    Returns :data:`WRITTEN`, or :data:`NOT_WRITTEN` with nothing changed."""
+    a matrix as given) and its determinant positive. A ``rotation`` with no rows leaves the row's rotation. Returns :data:`WRITTEN`, or :data:`NOT_WRITTEN` with nothing changed."""
     x, y, z = position[0], position[1], position[2]
     if not (abs(x) <= max_coordinate and abs(y) <= max_coordinate and abs(z) <= max_coordinate):  # NaN fails too
         return NOT_WRITTEN
