@@ -60,12 +60,10 @@ _new_tuple = tuple.__new__  # a NamedTuple with every field given, without its _
 TRACKING_ERROR = 10.0
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
-#: ... in a solve()'s attempt that settles its posture (:meth:`Controller.settle_steps`). Counted on bench_drag's
-#: three controlled paths, warm solve() drags of 150 frames: of ~1900 restorings the first step decided all but 3
-#: (studio), the third none, and a failed restoring cost 3 linearisations (hands at 0: 5.3 a frame). At 1, with the
-#: settle refusals: 12.3 / 7.7 / 14.6 prioritised solves a warm solve() -> 6.9 / 5.6 / 11.4 (hands at 0 / pins /
-#: studio) at the same quality (README, "Warm solve() with a posture"). step() keeps 3: the retargeter's steps (and
-#: so the bundled priors) stay as they were.
+#: ... in a solve()'s attempt that settles its posture (:meth:`Controller.settle_steps`). On bench_drag's warm solve()
+#: drags the first restoring step decided all but 3 of ~1900 and the third none; at 1, with the settle refusals,
+#: 12.3 / 7.7 / 14.6 prioritised solves a warm solve() -> 6.9 / 5.6 / 11.4 (hands at 0 / pins / studio) at the same
+#: quality (README, "Warm solve() with a posture"). step() keeps 3, so the retargeter and bundled priors do not move.
 SETTLE_RESTORING_STEPS = 1
 #: While steps succeed the adaptive damping falls to this fraction of ``settings.damping`` (the fast path's floor is
 #: 0.1): near a fold of a target's reach (a straight spine raising the head, a straight leg) the smallest singular
