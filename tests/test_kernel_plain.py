@@ -30,17 +30,22 @@ def arm() -> gsik.Skeleton:
     return skeleton_from_urdf(ARM, effectors=["hand"], root="base")
 
 
+def _box_problem(rng, n: int, least_damping: float, b_scales: tuple | None, x_scale: float) -> tuple:
+    """``(A (n, n), b (n,), lo (n,), hi (n,), x0 (n,))``: damped normal equations of a random (n + 2, n) Jacobian,
+    a box holding 0 and a start inside it; ``b`` of unit scale, or of a scale drawn from ``b_scales``."""
+    J = rng.normal(size=(n + 2, n))
+    A = J.T @ J + rng.uniform(least_damping, 1e-1) * np.eye(n)
+    b = rng.normal(size=n) if b_scales is None else rng.normal(scale=rng.uniform(*b_scales), size=n)
+    half = rng.uniform(0.01, 2.0, n)
+    lo, hi = -half * rng.uniform(0.0, 1.0, n), half
+    return A, b, lo, hi, np.clip(rng.normal(scale=x_scale, size=n), lo, hi)
+
+
 @settings(max_examples=60, deadline=None)
 @given(n=st.integers(1, 12), seed=st.integers(0, 2 ** 32 - 1), sweeps=st.integers(0, 12),
        garbage=st.sampled_from([np.nan, 1e300, -3.0]))
 def test_bounded_solve_in_is_bounded_solve_whatever_its_work_arrays_hold(n, seed, sweeps, garbage):
-    rng = np.random.default_rng(seed)
-    J = rng.normal(size=(n + 2, n))
-    A = J.T @ J + rng.uniform(1e-6, 1e-1) * np.eye(n)
-    b = rng.normal(size=n)
-    half = rng.uniform(0.01, 2.0, n)
-    lo, hi = -half * rng.uniform(0.0, 1.0, n), half
-    x0 = np.clip(rng.normal(scale=0.5, size=n), lo, hi)
+    A, b, lo, hi, x0 = _box_problem(np.random.default_rng(seed), n, 1e-6, None, 0.5)
     x_a, x_b = x0.copy(), x0.copy()
     st_a, st_b = np.zeros(kernels.N_STATS), np.zeros(kernels.N_STATS)
     pgs.bounded_solve(A, b, x_a, lo, hi, sweeps, st_a)
@@ -56,13 +61,7 @@ def test_bounded_solve_stopped_early_is_the_whole_answer_inside_the_box_or_says_
     """``until_inside``: sweeps stopped early give the whole system's answer when it lies inside the box (a step's
     usual case, the box's minimiser), False when it does not (the step then solves again without it), and the
     full path's numbers when no sweep left every unknown inside."""
-    rng = np.random.default_rng(seed)
-    J = rng.normal(size=(n + 2, n))
-    A = J.T @ J + rng.uniform(1e-3, 1e-1) * np.eye(n)
-    b = rng.normal(scale=rng.uniform(0.01, 1.0), size=n)
-    half = rng.uniform(0.01, 2.0, n)
-    lo, hi = -half * rng.uniform(0.0, 1.0, n), half
-    x0 = np.clip(rng.normal(scale=0.1, size=n), lo, hi)
+    A, b, lo, hi, x0 = _box_problem(np.random.default_rng(seed), n, 1e-3, (0.01, 1.0), 0.1)
     x_full, x_early = x0.copy(), x0.copy()
     st_full, st_early = np.zeros(kernels.N_STATS), np.zeros(kernels.N_STATS)
     pgs.bounded_solve(A, b, x_full, lo, hi, sweeps, st_full)
