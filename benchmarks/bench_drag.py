@@ -5,7 +5,7 @@ The biped on its right foot; pelvis and left foot held 6-DOF at priority 0; both
 then dragged position-only round a 0.1 m circle (one turn per 100 frames) for ``--frames`` frames. Per path:
 
 - ``step``: one ``Solver.step()`` a frame: median µs, frames with both hands within 1 mm, frames with both pins
-  within 0.1 mm;
+  within 0.1 mm, frames whose last controlled step needed restoring steps (a posture's move broke a met level);
 - ``solve``: one ``Solver.solve()`` a frame, warm from the last frame: median ms, linearisations and µs per
   linearisation (each frame's time over its linearisations; beside the step's µs a frame); where the
   settings have ``posture_tolerance``, the quality of its settle test against a drag solved with it off (0: a solve
@@ -78,6 +78,7 @@ def _drag(posture: str | None, hand_priority: int, frames: int, solve: bool, **s
     solver.step() if not solve else solver.solve()  # build what the path builds once
     solver.set_q(start)
     times, hands, pins, iterations, poses_q, points, costs = [], 0, 0, [], [], [], []
+    restored = _count_restoring(solver)
     for frame in range(frames):
         targets = _targets(poses, frame, hand_priority)
         t0 = time.perf_counter()
@@ -90,11 +91,32 @@ def _drag(posture: str | None, hand_priority: int, frames: int, solve: bool, **s
         poses_q.append(r.q)
         points.append(solver.world_positions())
         costs.append(_posture_cost(solver))
+        restored(frame)
     per_linearisation = [t / i for t, i in zip(times, iterations) if i > 0]
     return {"us": 1e6 * float(np.median(times)), "hands": hands, "pins": pins,
             "us_per_linearisation": 1e6 * float(np.median(per_linearisation)) if per_linearisation else 0.0,
-            "iterations": float(np.median(iterations)), "q": np.array(poses_q), "points": np.array(points),
+            "iterations": float(np.median(iterations)), "restored": restored(None), "q": np.array(poses_q),
+            "points": np.array(points),
             "cost": np.array(costs)}
+
+
+def _count_restoring(solver):
+    """``count(frame)``: after a frame, counts it if its last controlled step's full step was given restoring steps
+    (the compiled step's ``R_RESTORED``: a posture's move broke a met level); ``count(None)``: the frames counted."""
+    from gsik.kernels import accept
+
+    frames = set()
+
+    def count(frame):
+        if frame is None:
+            return len(frames)
+        controller = getattr(solver, "_controller", None)
+        cache = getattr(controller, "_cache", None)
+        if hasattr(accept, "R_RESTORED") and cache is not None and cache.out[accept.R_RESTORED] > 0.0:
+            frames.add(frame)
+        return len(frames)
+
+    return count
 
 
 def _posture_cost(solver) -> float:
@@ -151,8 +173,8 @@ def _print(rows: dict, frames: int) -> None:
     print(f"load {os.getloadavg()[0]:.1f}; {frames} frames\n")
     print("| code | path | step µs (x plain) | hands within 1 mm | pins within 0.1 mm | warm solve() ms (x plain) "
           "| linearisations | solve µs per linearisation (x step) | vs posture_tolerance 0: max rad, mm, cost ratio "
-          "| vs settle_refusals off |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "| vs settle_refusals off | step frames restored |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for code, row in rows.items():
         plain = row["plain"]
         for name, r in row.items():
@@ -160,7 +182,7 @@ def _print(rows: dict, frames: int) -> None:
             print(f"| {code} | {name} | {s['us']:.0f} ({s['us'] / plain['step']['us']:.1f}x) | {s['hands']}/{frames} "
                   f"| {s['pins']}/{frames} | {v['us'] / 1e3:.2f} ({v['us'] / plain['solve']['us']:.1f}x) "
                   f"| {v['iterations']:.0f} | {_per_linearisation(v, s)} | {_quality(v)} "
-                  f"| {_quality(v.get('refusals', {}))} |")
+                  f"| {_quality(v.get('refusals', {}))} | {s.get('restored', '-')} |")
 
 
 def _per_linearisation(v: dict, s: dict) -> str:

@@ -5,6 +5,7 @@ import pytest
 
 from gsik import Solver, Target
 from gsik.control import Controller, frame_tasks
+from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
 from gsik.kernels import priority as priority_kernel
 from gsik.kinematics import jacobian, world_frames
@@ -112,7 +113,13 @@ def test_step_and_trial_match_the_svd_step_and_forward_kinematics(problem, biped
     levels = [Level(wk.rows[a:b], wk.errors[a:b], wk.weights[a:b]) for a, b in zip(starts[:-1], starts[1:])]
     lo = np.minimum(np.maximum(biped.lower - q, -c._settings.max_step), 0.0)
     hi = np.maximum(np.minimum(biped.upper - q, c._settings.max_step), 0.0)
-    np.testing.assert_allclose(dq, prioritized_step_svd(levels, lo, hi, dampings), atol=1e-7)
+    full, below = prioritized_step_svd(levels, lo, hi, dampings), prioritized_step_svd(levels[:-1], lo, hi,
+                                                                                       dampings[:-1])
+    # a full posture factor's share of the step (the step minus the targets' own) is scaled onto its bound
+    bound, largest = c._posture_rows.share[0], np.abs(full - below).max()
+    scale = bound / largest if 0.0 < bound < largest else 1.0
+    np.testing.assert_allclose(dq, below + scale * (full - below), atol=1e-7)
+    assert (bound > 0.0) == (posture.precision.ndim == 2)
     q2 = np.clip(q + dq, biped.lower, biped.upper)
     np.testing.assert_array_equal(wk.q, q2)
     R2, p2 = world_frames(biped, q2, W, biped.root)
@@ -155,7 +162,8 @@ def _drag_frame1(biped, tracking_steps):
     return solver.step(targets), solver
 
 
-def test_tracking_steps_keep_a_dragged_hand_within_1_mm_where_one_linearisation_lags(biped):
+def test_tracking_steps_keep_a_dragged_hand_within_1_mm_where_one_linearisation_lags(biped, monkeypatch):
+    monkeypatch.setattr(ck, "POSTURE_SHARE", 0.0)  # the prior's whole move: its second order breaks the hands
     (one, _), (three, solver) = _drag_frame1(biped, 1), _drag_frame1(biped, 3)
     hands = ("left_hand", "right_hand")
     assert one.iterations == 1
@@ -164,3 +172,14 @@ def test_tracking_steps_keep_a_dragged_hand_within_1_mm_where_one_linearisation_
     assert max(three.errors()[h][0] for h in hands) <= 1e-3
     assert max(three.errors()[n][0] for n in ("pelvis", "left_foot")) <= 1e-4
     assert solver.step().iterations == 1  # nothing lags: one linearisation
+
+
+def test_the_prior_s_bounded_share_keeps_the_hands_in_one_linearisation_without_restoring(biped):
+    """The same frame with the prior's share of the step bounded (the default): one linearisation keeps both hands
+    within 1 mm and the pins within 0.1 mm, and its full step is accepted without a restoring step."""
+    one, solver = _drag_frame1(biped, 1)
+    assert solver._controller._posture_rows.share[0] == ck.POSTURE_SHARE > 0.0
+    assert one.iterations == 1
+    assert max(one.errors()[h][0] for h in ("left_hand", "right_hand")) <= 1e-3
+    assert max(one.errors()[n][0] for n in ("pelvis", "left_foot")) <= 1e-4
+    assert solver._controller._cache.out[ak.R_RESTORED] == 0.0 and solver._controller._cache.out[ak.R_COMMITTED]

@@ -30,11 +30,13 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
-from gsik.kernels.posture_level import normal_matrix, prioritized_step_posture
+from gsik.kernels.posture_level import normal_matrix
+from gsik.kernels.posture_share import POSTURE_SHARE, bounded_step
 
 # Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
-# convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0).
-O_STATUS, O_CONVERGED, O_TARGET_COST, O_LAGGING = range(4)
+# convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0); the full
+# step's posture share's largest component before its bound [rad] (0: not bounded, :mod:`gsik.kernels.posture_share`).
+O_STATUS, O_CONVERGED, O_TARGET_COST, O_LAGGING, O_SHARE = range(5)
 
 
 class ControlTasks(NamedTuple):
@@ -76,22 +78,29 @@ class PostureRows(NamedTuple):
         normal: (n_dofs, n_dofs) ``P`` where the step solves the level by its normal equations (a full,
             well-conditioned factor: :func:`gsik.kernels.posture_level.normal_matrix`), else empty (default:
             the pivoted QR's level).
+        share: (1,) the bound [rad] on the posture level's share of a step where ``normal`` is given
+            (:func:`gsik.kernels.posture_share.bounded_step`; 0: none).
     """
 
     reference: np.ndarray
     factor: np.ndarray
     gain: np.ndarray
     normal: np.ndarray = np.zeros((0, 0))  # empty: nothing in it to change
+    share: np.ndarray = np.zeros(1)  # 0: no bound (posture_rows gives each posture its own array)
 
 
 def posture_rows(reference: np.ndarray | None, factor: np.ndarray) -> PostureRows:
     """The :class:`PostureRows` of a posture at ``reference`` (n,) [rad] with the factor ``factor`` (k, n) of its
-    precision (``None`` and (0, n): no posture); gain 1."""
+    precision (``None`` and (0, n): no posture); gain 1; a full factor's (the learned prior's, solved by its normal
+    equations) share of a step bounded by :data:`gsik.kernels.posture_share.POSTURE_SHARE`, a diagonal one's not
+    (the retargeter's and the bundled priors' results stay bit for bit)."""
     n = factor.shape[1]
     if reference is None:
-        return PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1), np.zeros((0, n)))
+        return PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1), np.zeros((0, n)), np.zeros(1))
     factor = np.ascontiguousarray(factor, dtype=float)
-    return PostureRows(np.array(reference, dtype=float), factor, np.ones(1), normal_matrix(factor))
+    normal = normal_matrix(factor)
+    share = np.array([POSTURE_SHARE if normal.shape[0] > 0 else 0.0])
+    return PostureRows(np.array(reference, dtype=float), factor, np.ones(1), normal, share)
 
 
 class ControlWork(NamedTuple):
@@ -103,7 +112,7 @@ class ControlWork(NamedTuple):
         q: (n,) the trial angles [rad]. R: (n_frames, 3, 3), p: (n_frames, 3) the trial's world frames.
         e: (6m,) the trial's error rows. err: (2, m) its tasks' position [m] and orientation [rad] errors.
         costs: (L + 1,) the trial's level costs, the posture's last. met: (L + 1,) bool the trial's met levels.
-        M: (3, 3) scratch. out: (4,) the trial's ``O_*`` figures.
+        M: (3, 3) scratch. out: (5,) the trial's ``O_*`` figures. below: (n,) the target levels' step [rad].
     """
 
     J: np.ndarray
@@ -123,6 +132,7 @@ class ControlWork(NamedTuple):
     met: np.ndarray
     M: np.ndarray
     out: np.ndarray
+    below: np.ndarray
 
 
 def make_work(n_frames: int, n_dofs: int, n_tasks: int, n_packed: int, n_levels: int, n_packed_levels: int) \
@@ -133,7 +143,7 @@ def make_work(n_frames: int, n_dofs: int, n_tasks: int, n_packed: int, n_levels:
     return ControlWork(np.zeros((6 * m, n)), np.zeros((n_packed, n)), np.zeros(n_packed), np.zeros(n_packed),
                        np.zeros(n_packed_levels), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                        np.zeros((n_frames, 3, 3)), np.zeros((n_frames, 3)), np.zeros(6 * m), np.zeros((2, m)),
-                       np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(4))
+                       np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(5), np.zeros(n))
 
 
 @njit(cache=True)
@@ -257,17 +267,18 @@ def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, 
     """One prioritised step from ``q`` (n,) [rad] (frames ``R``, ``p``, error rows ``e``, level ``costs`` there) and
     its trial, into ``wk``: the levels linearised and packed (:func:`linearise`), each one's damping
     (:func:`dampings_into`, the adaptive ``lam`` and the ``base`` damping, ``near`` (L,)), the box (:func:`box`),
-    the step ``wk.dq`` (:func:`gsik.kernels.posture_level.prioritized_step_posture`, a full posture's level by its
-    normal equations; ``tols``: its rank, box and relative box
-    tolerances, a tuple) and the trial at ``q + dq`` (:func:`trial`). ``wk.out[O_STATUS]``: the step kernel's status (no trial
-    when not OK)."""
+    the step ``wk.dq`` (:func:`gsik.kernels.posture_share.bounded_step`, a full posture's level by its normal
+    equations, its share bounded by ``posture.share``; ``tols``: its rank, box and relative box tolerances, a tuple)
+    and the trial at ``q + dq`` (:func:`trial`). ``wk.out[O_STATUS]``: the step kernel's status (no trial when not
+    OK), ``wk.out[O_SHARE]`` the posture share's largest component before its bound."""
     linearise(task_model, tasks, posture, q, R, p, e, wk)
     posture_on = posture.factor.shape[0] > 0
     dampings_into(costs, near, lam, base, posture_on, wk.dampings)
     box(q, q, lower, upper, max_step, wk.lo, wk.hi)
     rank_tol, box_tol, box_rel_tol = tols
-    status = prioritized_step_posture(wk.rows, wk.errors, wk.weights, tasks.starts, wk.dampings, wk.lo, wk.hi,
-                                      rank_tol, box_tol, box_rel_tol, posture.normal, wk.dq)
+    status, share = bounded_step(wk.rows, wk.errors, wk.weights, tasks.starts, wk.dampings, wk.lo, wk.hi, rank_tol,
+                                 box_tol, box_rel_tol, posture.normal, posture.share[0], wk.dq, wk.below)
     wk.out[O_STATUS] = status
+    wk.out[O_SHARE] = share
     if status == priority.OK:
         trial(fk, tasks, posture, root, W, lower, upper, q, wk.dq, 1.0, wk)
