@@ -399,13 +399,14 @@ class Controller(ControlTargets):
 
     def settle_steps(self, tolerance: float) -> None:
         """The posture's settle tolerance [rad] of the steps to come: ``settings.posture_tolerance`` while a
-        solve()'s :class:`gsik.stall.PostureSettle` runs, 0 after. While it is on, a worse full step that would
-        settle the posture (:meth:`_settles`) is refused at once (the attempt ends there, where up to 13
-        linearisations of retries would move the pose by about the tolerance at most), and a posture move that
-        broke a met level gets :data:`SETTLE_RESTORING_STEPS` restoring steps, not :data:`RESTORING_STEPS`."""
-        on = tolerance > 0.0 and self.settle_refusals
+        solve()'s :class:`gsik.stall.PostureSettle` runs, 0 after. While on, a worse full step that would settle the
+        posture (:meth:`_settles`) is refused at once (retries would move the pose by about the tolerance at most, for
+        up to 13 linearisations), a posture move that broke a met level gets :data:`SETTLE_RESTORING_STEPS` restoring
+        steps, and the prior's share of a step is not bounded (``PostureRows.share``; PostureSettle's gain rules)."""
+        on, rows = tolerance > 0.0 and self.settle_refusals, self._posture_rows
         self._cache.settle[0] = tolerance if on else 0.0
         self._restoring = SETTLE_RESTORING_STEPS if on else RESTORING_STEPS
+        rows.share[0] = ck.POSTURE_SHARE if tolerance <= 0.0 and rows.normal.shape[0] else 0.0
 
     def _settles(self, state0: LevelState, dq: np.ndarray) -> bool:
         """True if the full step ``dq`` (n,) [rad] from the start state ``state0`` settles the posture

@@ -183,3 +183,15 @@ def test_the_prior_s_bounded_share_keeps_the_hands_in_one_linearisation_without_
     assert max(one.errors()[h][0] for h in ("left_hand", "right_hand")) <= 1e-3
     assert max(one.errors()[n][0] for n in ("pelvis", "left_foot")) <= 1e-4
     assert solver._controller._cache.out[ak.R_RESTORED] == 0.0 and solver._controller._cache.out[ak.R_COMMITTED]
+
+
+def test_a_solve_s_settling_steps_leave_the_prior_s_share_unbounded(problem):
+    """While a solve()'s posture settles (its own gain scales the posture's step) the share is not bounded; after,
+    a full factor's is again (a diagonal one's never)."""
+    c, _, _, _, _, _, posture = problem
+    bounded = ck.POSTURE_SHARE if posture.precision.ndim == 2 else 0.0
+    assert c._posture_rows.share[0] == bounded
+    c.settle_steps(1e-3)
+    assert c._posture_rows.share[0] == 0.0
+    c.settle_steps(0.0)
+    assert c._posture_rows.share[0] == bounded
