@@ -23,8 +23,8 @@ placo is an optional peer (``pip install placo``, or the ``peers`` extra); witho
 prints gsik's figures alone. Timings on a shared machine are noisy: compare the peers within one run.
 
 ``--before CHECKOUT`` compares with another checkout of gsik in the same period: ``--rounds`` times, this
-checkout's run then the other's (the same script run by ``CHECKOUT/.venv/bin/python``, so with that checkout's
-gsik; placo where that interpreter has it), each printing its table.
+checkout's run then the other's (the same script run by ``CHECKOUT/.venv/bin/python`` with ``PYTHONPATH`` the
+checkout, so with that checkout's gsik; placo where that interpreter has it), each printing its table.
 """
 
 from __future__ import annotations
@@ -282,11 +282,15 @@ def main(argv=None) -> None:
 def alternate(args) -> None:
     """``args.rounds`` times: this checkout's run, then ``args.before``'s (its own interpreter), one after the other."""
     common = ["--problems", str(args.problems), "--frames", str(args.frames), "--seed", str(args.seed)]
-    runs = {"this checkout": sys.executable, f"before: {args.before}": str(args.before / ".venv" / "bin" / "python")}
+    here = Path(__file__).resolve().parent.parent
+    runs = {"this checkout": (sys.executable, here),
+            f"before: {args.before}": (str(args.before / ".venv" / "bin" / "python"), args.before.resolve())}
     for r in range(1, args.rounds + 1):
-        for label, python in runs.items():
+        for label, (python, checkout) in runs.items():
             print(f"\n## {label}, round {r} of {args.rounds}", flush=True)
-            subprocess.run([python, str(Path(__file__).resolve())] + common, check=True)
+            # Each run imports its own checkout's gsik first, whatever PYTHONPATH this run was given.
+            env = {**os.environ, "PYTHONPATH": str(checkout)}
+            subprocess.run([python, str(Path(__file__).resolve())] + common, check=True, env=env)
 
 
 if __name__ == "__main__":

@@ -3,7 +3,9 @@ previous paths bit for bit: the bounded solve whatever its held work arrays hold
 called with the named arrays; ``Solver.solve`` (its first attempt in one compiled call returning the statistics) as
 the attempts' general path, the state it leaves included (a next step and solve agree too)."""
 
+import gc
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -210,3 +212,29 @@ def test_solver_solve_is_the_general_path_on_the_biped(biped, rng):
         targets = {n: Target.from_transform(T) for n, T in biped.effector_poses(q, new.world_from_root).items()}
         _same(new.solve(targets, q0=biped.rest), old.solve(targets, q0=biped.rest))
         _same_state(new, old)
+
+
+@pytest.mark.parametrize("which", ["arm", "biped"])
+def test_the_uncounted_kernels_neither_keep_nor_drop_a_reference(arm, biped, which):
+    """The step, solve and move kernels compiled without numba's reference counting (``_nrt=False``) hold the
+    solver's buffers as before after hundreds of calls: a count kept would leak them, one dropped would free them
+    under the compiled code."""
+    sk, q0 = (arm, BENT) if which == "arm" else (biped, None)
+    solver = gsik.Solver(sk, q0=q0)
+    name = solver.effector_names[0]
+    T = solver.effector_poses()[name]
+    solver.set_target(name, Target.from_transform(T))
+    floats, ints = solver._buffers.floats, solver._buffers.ints
+    held = []
+    for frames in (1, 100):  # the first round makes the held compiled calls (which hold the buffers) once
+        for f in range(frames):
+            p = T[:3, 3] + 0.002 * f * np.array([0.0, 1.0, 1.0])
+            solver.move_target(name, p, T[:3, :3])
+            solver.step()
+            solver.move_target(name, p)
+            solver.step()
+        solver.solve()
+        gc.collect()
+        held.append((sys.getrefcount(floats), sys.getrefcount(ints)))
+    assert held[1] == held[0]
+    assert np.isfinite(solver.q).all()

@@ -5,6 +5,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import gsik
 from gsik import Target
@@ -205,3 +207,43 @@ def test_a_solve_with_restarts_keeps_the_moved_target(arm):
     assert solver.targets == {"hand": first.replace(position=far, orientation=turned)}
     fresh = gsik.Solver(arm, q0=solver.q)
     _same(solver.step(), fresh.step({"hand": first.replace(position=far, orientation=turned)}))
+
+
+@settings(max_examples=80, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), tilt=st.sampled_from([0.0, 1e-14, 1e-13, 4e-13, 1e-12, 3e-12, 1e-9, 1e-4, 1.0]),
+       far=st.sampled_from([None, 1e6, 1e6 * (1.0 + 2e-16), 1e6 + 1.0, np.inf, np.nan]), turned=st.booleans(),
+       flip=st.booleans())
+def test_a_float_array_moves_as_the_replaced_target_or_raises_as_it(arm, seed, tilt, far, turned, flip):
+    """The compiled write's own checks (coordinates within their bound, a rotation kept as given only when its
+    columns are orthonormal within EXACT_ROTATION and its determinant positive) against Target's: near and across
+    both boundaries, a move packs what setting the replaced target packs, bit for bit, or raises a TargetError as
+    replacing does and changes nothing."""
+    rng = np.random.default_rng(seed)
+    solver, fresh = gsik.Solver(arm, q0=BENT), gsik.Solver(arm, q0=BENT)
+    first = Target.from_transform(solver.effector_poses()["hand"], weight=0.5)
+    for s in (solver, fresh):
+        s.set_target("hand", first)
+    position = rng.normal(0.0, 0.3, 3)
+    if far is not None:
+        position[rng.integers(3)] = far * rng.choice([-1.0, 1.0])
+    w, x, y, z = rng.normal(size=4)
+    n = np.sqrt(w * w + x * x + y * y + z * z)
+    rotation = Target(np.zeros(3), (w / n, x / n, y / n, z / n)).rotation + tilt * rng.normal(size=(3, 3))
+    if flip:
+        rotation = -rotation
+    orientation = rotation if turned else None
+    rows = solver._buffers.floats.copy()
+    try:
+        replaced = first.replace(position=position) if orientation is None else \
+            first.replace(position=position, orientation=orientation)
+    except gsik.TargetError:  # (its wording for the same values as lists: test_bad_float_arrays_raise_as_...)
+        with pytest.raises(gsik.TargetError):
+            solver.move_target("hand", position, orientation)
+        assert solver.targets == {"hand": first}
+        assert np.array_equal(solver._buffers.floats, rows, equal_nan=True)
+        return
+    solver.move_target("hand", position, orientation)
+    fresh.set_target("hand", replaced)
+    assert np.array_equal(solver._packed.position, fresh._packed.position)
+    assert np.array_equal(solver._packed.rotation, fresh._packed.rotation)
+    assert solver.targets == {"hand": replaced}

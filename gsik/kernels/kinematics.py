@@ -5,6 +5,10 @@ rotations and positions [m]; an effector's 6 rows are 3 position rows then 3
 orientation rows; ``sign[e, d]`` is +1 where DOF ``d`` lies above effector
 ``e`` but not above the root, -1 where it lies above the root but not above
 the effector (it turns the other way round seen from the root), else 0.
+
+The kernels that only read and write arrays they are given are compiled without numba's reference counting
+(``_nrt=False``): each array argument and each array taken from a tuple was otherwise counted up and down with
+atomic operations, about half of a chain's compiled frame step (their callers hold the arrays for the call).
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ import numpy as np
 from gsik._jit import njit
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def log_map_into(R, out, off):
     """Write the rotation vector [rad] of rotation matrix ``R`` (3, 3) into ``out[off:off + 3]``.
 
@@ -68,7 +72,7 @@ def rotvec_from_matrix(R):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def forward_kinematics(model, q, root, W, R, p):
     """World frames of :class:`~gsik.kernels.KinematicModel` ``model`` at ``q`` (n_dofs,) [rad] into
     ``R`` (n, 3, 3), ``p`` (n, 3) [m], with frame ``root`` at ``W`` (4, 4).
@@ -124,7 +128,7 @@ def _turned_child(R, p, k, i, offset, axis, q, d):
         R[i, a, 2] = m0 * r02 + m1 * r12 + m2 * r22
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def frames_into(parent, offset, rotation, axis, dof, q, root, W, R, p):
     """:func:`forward_kinematics` on the model's arrays: the form the solver's inner loop calls
     (a NamedTuple argument is copied and reference-counted field by field on every call)."""
@@ -192,7 +196,7 @@ def frames_into(parent, offset, rotation, axis, dof, q, root, W, R, p):
             R[i, 2, b] = g20 * c0 + g21 * c1 + g22 * c2
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err, M):
     """Error vector ``e`` (6m,) (target minus current) and per-effector errors ``err`` (2, m).
 
@@ -217,7 +221,7 @@ def effector_errors(R, p, eff_frame, target_p, target_R, row_w, e, err, M):
     return cost
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def jacobian(model, R, p, J):
     """Fill ``J`` (6m, n_dofs): ``+-[r_d x (e - p_d); r_d]`` where DOF ``d`` moves effector ``e``.
 
@@ -247,7 +251,7 @@ def jacobian(model, R, p, J):
             J[6 * k + 5, d] = s * rz
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def linear_system(model, R, p, e, row_w, A, b, v):
     """``A = J^T W J`` and ``b = J^T W e`` straight from the frames, never forming J.
 

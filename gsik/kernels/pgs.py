@@ -1,7 +1,8 @@
 """Projected Gauss-Seidel kernels: the paper's sweeps, and the exact bounded minimiser.
 
 Both work in place on ``x`` and write sweeps, residual and last change into
-``stats`` (indices :data:`~gsik.kernels.O_SWEEPS` ...).
+``stats`` (indices :data:`~gsik.kernels.O_SWEEPS` ...). The kernels that allocate nothing are compiled without
+numba's reference counting (``_nrt=False``, as in :mod:`gsik.kernels.kinematics`).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ def _row_residual(A, b, x, i, n):
     return (r0 + r1) + (r2 + r3)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _projected_residual(A, b, x, lo, hi):
     """``|b - A x|`` over the unknowns not held at a bound by an outward-pointing residual."""
     res2 = 0.0
@@ -46,7 +47,7 @@ def _projected_residual(A, b, x, lo, hi):
     return math.sqrt(res2)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def projected_gauss_seidel(A, b, x, lo, hi, sweeps, res_tol, upd_tol, x_prev, stall_tol, stats):
     """Projected Gauss-Seidel on ``A x = b`` with ``lo <= x <= hi``, in place on ``x``.
 
@@ -96,7 +97,7 @@ def projected_gauss_seidel(A, b, x, lo, hi, sweeps, res_tol, upd_tol, x_prev, st
     stats[O_UPDATE] = upd
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _cholesky_solve(M, r, nf):
     """Solve ``M[:nf, :nf] y = r[:nf]`` in place in ``r`` (M SPD; overwritten). False if not SPD."""
     for j in range(nf):
@@ -199,7 +200,7 @@ def bounded_solve(A, b, x, lo, hi, sweeps, stats):
                      np.empty((n, n)), np.empty(n))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_inside=False):
     """:func:`bounded_solve` with its work arrays given (contents unused, none read before it writes them): the
     free set's indices ``free`` (n,) int64, its mask ``is_free`` (n,) bool, its system ``M`` (n, n) and right-hand

@@ -24,7 +24,8 @@ from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, N_STATS, O_COST, O_FINITE
                           O_STEP_NORM, O_SWEEPS, STALLED, KernelSettings, TargetArrays, make_scratch)
 from gsik.kernels.kinematics import linear_system
 from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
-from gsik.kernels.step import _add_clamped, _bounds, _evaluate, _finish_errors, _finite, norm_of, take_frames
+from gsik.kernels.step import (_add_clamped, _bounds, _evaluate, _finish_errors, _finite, copy_into, copy_rows,
+                               norm_of, take_frames)
 
 #: Share of an attempt's linearisations the positions-only phase may use.
 POSITION_PHASE_SHARE = 0.3
@@ -50,7 +51,7 @@ def _trial(model, settings, targets, root, W, q, lam, ws, sc, pgs_stats):
     """
     n = q.shape[0]
     x = sc.x_solve
-    sc.A_damped[:, :] = sc.A
+    copy_rows(sc.A_damped, sc.A)
     for i in range(n):
         sc.A_damped[i, i] += lam
     if settings.warm_start:  # from the last step taken, as a frame step starts from the last frame's
@@ -79,19 +80,19 @@ def _trial(model, settings, targets, root, W, q, lam, ws, sc, pgs_stats):
 @njit(cache=True, inline="always")
 def _take(q, ws, sc):
     """The trial becomes the state."""
-    q[:] = sc.q_new
+    copy_into(q, sc.q_new)
     take_frames(ws.R, ws.p, sc.R_new, sc.p_new)
-    ws.err[:, :] = sc.err_new
-    sc.x_prev[:] = sc.x_solve
+    copy_rows(ws.err, sc.err_new)
+    copy_into(sc.x_prev, sc.x_solve)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _iteration(model, settings, targets, root, W, q, lam, cost, ws, sc, pgs_stats):
     """One linearisation's step. Returns ``(cost, lam, taken, settled, sweeps)``.
 
     Adaptive damping: ``lam`` grows until a step lowers the error, which is
     then taken (Levenberg-Marquardt). Otherwise the paper's plain step with
-    fixed damping, always taken.
+    fixed damping, always taken. Compiled without reference counting, as :func:`gsik.kernels.step.step_with`.
     """
     if not settings.adaptive_damping:
         c, sweeps = _trial(model, settings, targets, root, W, q, settings.damping, ws, sc, pgs_stats)

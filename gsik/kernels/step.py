@@ -4,6 +4,10 @@
 :class:`~gsik.kernels.KernelSettings`, ``targets`` a
 :class:`~gsik.kernels.TargetArrays`, ``ws`` a :class:`~gsik.kernels.Workspace` (state kept between
 calls), ``sc`` a :class:`~gsik.kernels.Scratch` (made by each call: allocating it costs less than passing it in).
+
+:func:`step_with` and the kernels it calls are compiled without numba's reference counting (``_nrt=False``): on a
+chain the atomic counts of every array it handles were about half of its compiled time. They allocate nothing and
+copy arrays by loops (numba's whole-array copy needs the counting).
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ ADAPTIVE_FLOOR = 0.1
 EARLY_STOP_DOFS = 8
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _finish_errors(row_w, err, pos_tol, ori_tol):
     """Zero the errors of unused rows (no target, position only); True if all are within tolerance."""
     ok = True
@@ -78,14 +82,29 @@ def take_frames(R, p, R_new, p_new):
                 R[i, a, b] = R_new[i, a, b]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def copy_into(dst, src):
+    """``dst[:] = src`` for vectors (n,) as a loop (no reference counting: see the module's docstring)."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True, inline="always")
+def copy_rows(dst, src):
+    """``dst[:, :] = src`` for matrices (r, c) as loops (see :func:`copy_into`)."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
+
+
+@njit(cache=True, _nrt=False)
 def _add_clamped(q, x, lower, upper, out):
     """``out = clip(q + x, lower, upper)``: the bounds on x keep q + x inside up to one rounding."""
     for i in range(q.shape[0]):
         out[i] = min(max(q[i] + x[i], lower[i]), upper[i])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _bounds(q, lower, upper, max_step, lo, hi):
     for i in range(q.shape[0]):
         lo[i] = lower[i] - q[i]
@@ -115,7 +134,7 @@ def _evaluate(model, targets, root, W, q, R, p, e, err, M):
 @njit(cache=True, inline="always")
 def _idle(ws, sc, cost, finite):
     """Every target already met (or the errors are not finite): an idle frame costs one error evaluation."""
-    ws.err[:, :] = sc.err_new
+    copy_rows(ws.err, sc.err_new)
     ws.x[:] = 0.0
     st = ws.stats
     st[O_SWEEPS] = 0
@@ -145,7 +164,7 @@ def _step_solve(model, settings, q, lam, ws, sc):
     for i in range(n):
         A[i, i] += lam
     _bounds(q, model.lower, model.upper, settings.max_step, lo, hi)
-    sc.x_prev[:] = x
+    copy_into(sc.x_prev, x)
     _start(x, sc.x_prev, lo, hi, settings.warm_start)
     if settings.subspace_minimization:
         if not bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask,
@@ -201,14 +220,13 @@ def step(model, settings, targets, root, W, q, ws):
                      make_scratch(ws.R.shape[0], q.shape[0], ws.err.shape[1], False))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def step_with(model, settings, targets, root, W, q, ws, sc):
-    """:func:`step` with its scratch ``sc`` (a :class:`~gsik.kernels.Scratch`) given (inlined into both callers,
-    :func:`step` and :func:`gsik.kernels.plain.step_plain`: a call passing every field costs the named step a
-    microsecond on the biped)."""
+    """:func:`step` with its scratch ``sc`` (a :class:`~gsik.kernels.Scratch`) given: what :func:`step` and
+    :func:`gsik.kernels.plain.step_plain` call, without reference counting (see the module's docstring)."""
     cost0 = effector_errors(ws.R, ws.p, model.effector_frame, targets.position, targets.rotation,
                             targets.row_weight, sc.e, ws.err, sc.M)
-    sc.err_new[:, :] = ws.err
+    copy_rows(sc.err_new, ws.err)
     if _finish_errors(targets.row_weight, sc.err_new, settings.position_tolerance, settings.orientation_tolerance):
         finite = _finite(q, sc.err_new, targets.row_weight)
         _idle(ws, sc, cost0, finite)
@@ -224,9 +242,9 @@ def step_with(model, settings, targets, root, W, q, ws, sc):
     # A non-finite step is never taken: the caller refuses it (Status.REFUSED) from stats[O_FINITE].
     finite = not accepted or _finite(sc.q_new, sc.err_new, targets.row_weight)
     if accepted and finite:
-        q[:] = sc.q_new
+        copy_into(q, sc.q_new)
         take_frames(ws.R, ws.p, sc.R_new, sc.p_new)
-        ws.err[:, :] = sc.err_new
+        copy_rows(ws.err, sc.err_new)
     _step_stats(settings, targets, ws, cost, accepted)
     ws.stats[O_FINITE] = finite
     return finite
