@@ -33,9 +33,10 @@ _POSITION_ROWS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 class AttemptPolicy:
     """:meth:`solve` and its attempts, for :class:`~gsik.solver.Solver`."""
 
-    #: ``(controller, angles' bytes, posture gain)``: where the last prioritised attempt with a posture ended, and
-    #: the share of the posture's step it had learnt (:class:`~gsik.stall.PostureSettle`).
-    _posture_gain: tuple = (None, b"", 1.0)
+    #: ``(controller, angles' bytes, posture gain, contraction)``: where the last prioritised attempt with a posture
+    #: ended, the share of the posture's step it had learnt and its steps' last contraction
+    #: (:class:`~gsik.stall.PostureSettle`).
+    _posture_gain: tuple = (None, b"", 1.0, 0.0)
     #: The last prioritised attempt ended with a step (the pose is the one it left), not a return to a pose.
     _stepped: bool = False
 
@@ -398,7 +399,7 @@ class AttemptPolicy:
                     break
         finally:
             if posture is not None:  # the gain learnt stays for an attempt from here; a step takes it whole
-                self._posture_gain = (c, self._q.tobytes(), float(c.posture_gain[0]))
+                self._posture_gain = (c, self._q.tobytes(), float(c.posture_gain[0]), posture.contraction)
                 c.posture_gain[0] = 1.0
                 c.settle_steps(0.0)
         return st, it
@@ -412,10 +413,12 @@ class AttemptPolicy:
         if self._posture is None or self._balance or self._settings.posture_tolerance <= 0.0:
             return None
         learnt = self._posture_gain
-        c.posture_gain[0] = learnt[2] if learnt[0] is c and learnt[1] == self._q.tobytes() else 1.0
+        warm = learnt[0] is c and learnt[1] == self._q.tobytes()
+        c.posture_gain[0] = learnt[2] if warm else 1.0
         if converged is None:
             converged = c.converged(self._ws.R, self._ws.p)
-        return PostureSettle(self._settings.posture_tolerance, converged, c.posture_gain)
+        return PostureSettle(self._settings.posture_tolerance, converged, c.posture_gain,
+                             learnt[3] if warm else None)
 
     def _control_status(self, c, st) -> Status:
         """How a prioritised attempt ended, given its last step ``st`` (None if it made none). The last step's
