@@ -102,10 +102,10 @@ class PostureSettle:
     ``settle_tolerance`` (near its optimum a met target's in-band correction, part of every full step, costs the
     posture more than that: refusals while the damping climbs, until :class:`StallDetector` calls a stall).
 
-    A warm attempt (one that starts where the last one with this controller ended, as a drag's solve() a frame does:
-    ``contraction`` given) reads its steps as a secant-tuned iteration. Its gain is the share that closes in at once,
-    so the step itself, not the step over the gain, estimates the remaining change (the test: no DOF of the full step
-    above the tolerance). And it skips the verifying step: a step taken whole and ending with every target within its
+    A warm attempt (a solve()'s first, starting where the last solve converged and its last attempt with this
+    controller ended, as a drag's solve() a frame does: ``contraction`` given) reads its steps as a secant-tuned
+    iteration. Its gain is the share that closes in at once, so the step itself, not the step over the gain,
+    estimates the remaining change (the test: no DOF of the full step above the tolerance). And it skips the verifying step: a step taken whole and ending with every target within its
     tolerances settles the posture when its full step times the contraction (the larger of its ratio to the last
     whole step's and ``contraction``, the last ratio the previous attempt measured: a slow mode the first steps hide)
     passes that test, the contraction at most :data:`CONTRACTION` (:meth:`_predicted`). A cold attempt (``None``)
