@@ -105,11 +105,11 @@ class PostureSettle:
     A warm attempt (a solve()'s first, starting where the last solve converged and its last attempt with this
     controller ended, as a drag's solve() a frame does: ``contraction`` given) reads its steps as a secant-tuned
     iteration. Its gain is the share that closes in at once, so the step itself, not the step over the gain,
-    estimates the remaining change (the test: no DOF of the full step above the tolerance). And it skips the verifying step: a step taken whole and ending with every target within its
-    tolerances settles the posture when its full step times the contraction (the larger of its ratio to the last
-    whole step's and ``contraction``, the last ratio the previous attempt measured: a slow mode the first steps hide)
-    passes that test, the contraction at most :data:`CONTRACTION` (:meth:`_predicted`). A cold attempt (``None``)
-    keeps the test above, bit for bit.
+    estimates the remaining change (the test: no DOF of the full step above the tolerance). And it skips the
+    verifying step: a step taken whole and ending with every target within its tolerances settles the posture when
+    its full step times the contraction (the larger of its ratio to the last whole step's and ``contraction``, the
+    last ratio the previous attempt measured: a slow mode the first steps hide) passes that test, the contraction at
+    most :data:`CONTRACTION` (:meth:`_predicted`). A cold attempt (``None``) keeps the test above, bit for bit.
 
     Args:
         tolerance: The largest remaining change of one DOF [rad] of a settled posture (0: never settled).
