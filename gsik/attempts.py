@@ -33,11 +33,14 @@ _POSITION_ROWS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 class AttemptPolicy:
     """:meth:`solve` and its attempts, for :class:`~gsik.solver.Solver`."""
 
-    #: ``(controller, angles' bytes, posture gain)``: where the last prioritised attempt with a posture ended, and
-    #: the share of the posture's step it had learnt (:class:`~gsik.stall.PostureSettle`).
-    _posture_gain: tuple = (None, b"", 1.0)
+    #: ``(controller, angles' bytes, posture gain, contraction)``: where the last prioritised attempt with a posture
+    #: ended, the share of the posture's step it had learnt and its steps' last contraction
+    #: (:class:`~gsik.stall.PostureSettle`).
+    _posture_gain: tuple = (None, b"", 1.0, 0.0)
     #: The last prioritised attempt ended with a step (the pose is the one it left), not a return to a pose.
     _stepped: bool = False
+    #: The attempt under way is a warm solve's first (:meth:`_warm_start`): its posture settle test is the warm one.
+    _warm_attempt: bool = False
 
     def solve(self, targets: Mapping[str, Target | None] | None = None, q0=None) -> SolveResult:
         """Solve to convergence (or best reach) from ``q0`` (default: the current angles).
@@ -143,7 +146,11 @@ class AttemptPolicy:
         self._work_done = [0, 0]
         if first is None:
             start = self._q.copy()
-            stats = self._solve_from(start)
+            self._warm_attempt = self._warm_start(start)
+            try:
+                stats = self._solve_from(start)
+            finally:
+                self._warm_attempt = False
         else:
             start, stats = first[0], self._count(first[1])
         attempts = 1
@@ -398,24 +405,27 @@ class AttemptPolicy:
                     break
         finally:
             if posture is not None:  # the gain learnt stays for an attempt from here; a step takes it whole
-                self._posture_gain = (c, self._q.tobytes(), float(c.posture_gain[0]))
+                self._posture_gain = (c, self._q.tobytes(), float(c.posture_gain[0]), posture.contraction)
                 c.posture_gain[0] = 1.0
                 c.settle_steps(0.0)
         return st, it
 
     def _posture_settle(self, c, converged: bool | None = None) -> PostureSettle | None:
         """The posture's step share and settle test for an attempt's steps (:class:`~gsik.stall.PostureSettle`;
-        the share the last attempt with this controller learnt if this one starts where it ended, as a drag's warm
-        solve does: the curvature it measured is that of this pose), or ``None`` without a posture, with balance (its
+        the share and the steps' contraction the last attempt with this controller learnt if this one starts where
+        it ended, as a drag's warm solve does: the curvature it measured is that of this pose; in a warm solve's
+        first attempt the settle test is the warm one), or ``None`` without a posture, with balance (its
         level's state is not the targets'), or at ``posture_tolerance`` 0. ``converged``: the targets' state at the
         start pose if known (:meth:`_control_positions_first` read it)."""
         if self._posture is None or self._balance or self._settings.posture_tolerance <= 0.0:
             return None
         learnt = self._posture_gain
-        c.posture_gain[0] = learnt[2] if learnt[0] is c and learnt[1] == self._q.tobytes() else 1.0
+        here = learnt[0] is c and learnt[1] == self._q.tobytes()
+        c.posture_gain[0] = learnt[2] if here else 1.0
         if converged is None:
             converged = c.converged(self._ws.R, self._ws.p)
-        return PostureSettle(self._settings.posture_tolerance, converged, c.posture_gain)
+        return PostureSettle(self._settings.posture_tolerance, converged, c.posture_gain,
+                             learnt[3] if here and self._warm_attempt else None)
 
     def _control_status(self, c, st) -> Status:
         """How a prioritised attempt ended, given its last step ``st`` (None if it made none). The last step's

@@ -77,6 +77,9 @@ MIN_POSTURE_GAIN = 0.1
 #: Two posture moves measure the curvature along one direction when the square of their cosine is at least this
 #: (within 25 degrees of one line): others turned, and their ratio says nothing about the step's length.
 COLLINEAR = 0.81
+#: A warm attempt's steps contracting by at least this factor a step converge linearly: the next full step is
+#: estimated as the last one times the contraction (:class:`PostureSettle`).
+CONTRACTION = 0.5
 
 
 class PostureSettle:
@@ -99,17 +102,33 @@ class PostureSettle:
     ``settle_tolerance`` (near its optimum a met target's in-band correction, part of every full step, costs the
     posture more than that: refusals while the damping climbs, until :class:`StallDetector` calls a stall).
 
+    A warm attempt (a solve()'s first, starting where the last solve converged and its last attempt with this
+    controller ended, as a drag's solve() a frame does: ``contraction`` given) reads its steps as a secant-tuned
+    iteration. Its gain is the share that closes in at once, so the step itself, not the step over the gain,
+    estimates the remaining change (the test: no DOF of the full step above the tolerance). And it skips the
+    verifying step: a step taken whole and ending with every target within its tolerances settles the posture when
+    its full step times the contraction (the larger of its ratio to the last whole step's and ``contraction``, the
+    last ratio the previous attempt measured: a slow mode the first steps hide) passes that test, the contraction at
+    most :data:`CONTRACTION` (:meth:`_predicted`). A cold attempt (``None``) keeps the test above, bit for bit.
+
     Args:
         tolerance: The largest remaining change of one DOF [rad] of a settled posture (0: never settled).
         converged: Every target is within its tolerances at the start pose.
         gain: (1,) the controller's posture gain, adapted in place.
+        contraction: A warm attempt's starting contraction (the ratio of consecutive whole steps' largest DOFs the
+            last attempt measured last, 0 if none), or ``None`` for a cold attempt. :attr:`contraction` is the
+            last one measured (for the next warm attempt).
     """
 
-    def __init__(self, tolerance: float, converged: bool, gain: np.ndarray):
+    def __init__(self, tolerance: float, converged: bool, gain: np.ndarray, contraction: float | None = None):
         self._tolerance = tolerance
         self._converged = converged
         self.gain = gain
         self._moved = None  # the last posture move (n_dofs,) [rad], or None
+        self._warm = contraction is not None
+        self._carried = contraction or 0.0
+        self.contraction = self._carried
+        self._last_full = 0.0  # the last step's largest DOF [rad] if it was taken whole, else 0
 
     def settled(self, step: np.ndarray, moved: np.ndarray, converged: bool) -> bool:
         """True if this step settles the posture; adapts the gain from this step's move and the last one's.
@@ -121,14 +140,27 @@ class PostureSettle:
             converged: Every target is within its tolerances after the step.
         """
         within, self._converged = self._converged and converged, converged
+        full = float(np.abs(step).max())
+        whole = full > 0.0 and float(np.abs(moved).max()) >= 0.5 * full  # not halved twice, nor refused
+        last, self._last_full = self._last_full, (full if whole else 0.0)
+        if whole and last > 0.0:
+            self.contraction = full / last
         if not within:
             self._moved = None
-            return False
-        gain = float(self.gain[0])
-        full = float(np.abs(step).max())
-        if full > 0.0 and float(np.abs(moved).max()) >= 0.5 * full:  # a posture move, not a halving
+            return self._warm and converged and whole and self._predicted(full, last)
+        if whole:  # a posture move
             self._secant(moved)
-        return full <= self._tolerance * gain
+        if not self._warm:
+            return full <= self._tolerance * float(self.gain[0])
+        return full <= self._tolerance or (whole and self._predicted(full, last))
+
+    def _predicted(self, full: float, last: float) -> bool:
+        """True if the next step's full step, this one's largest DOF ``full`` [rad] times the contraction (its ratio
+        to the last whole step's ``last``, or the carried one if larger), passes the warm settle test."""
+        if not last > 0.0:
+            return False
+        contraction = max(full / last, self._carried)
+        return contraction <= CONTRACTION and contraction * full <= self._tolerance
 
     def _secant(self, moved: np.ndarray) -> None:
         """The gain from this posture move (n_dofs,) [rad] and the last one, when they lie along one line."""

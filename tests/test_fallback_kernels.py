@@ -96,7 +96,8 @@ CASES = [("hands at 0", 16, (0.0, 0.0, 0.0), True, [("targets alone", True), ("t
                                              ("halved", 1, "better"), ("halved", 0, "worse")]),
          ("pins", 16, (0.0, 0.0, 0.0), False, [("halved", 3, "same")]),
          ("studio", 30, (0.0, 0.0, 0.0), True, [("targets alone", True), ("targets alone", False),
-                                               ("halved", 2, "better"), ("halved", 1, "same")]),
+                                               ("halved", 1, "better"), ("halved", 2, "better"),
+                                               ("halved", 0, "same")]),
          ("pins", 8, (0.0, -0.3, -0.3), True, [("correction", True), ("correction", False)])]
 
 

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import gsik
+import gsik.attempts
 from gsik.prior import bundled_prior, use_prior
 from gsik.stall import PostureSettle
 
@@ -37,6 +38,42 @@ def test_the_start_of_a_step_is_where_the_last_one_ended():
     assert settle.settled(STEP, STEP, True)
 
 
+def test_a_warm_attempt_reads_the_step_made_with_a_learnt_share_as_the_remaining_change():
+    assert not _settle(gain=0.5).settled(STEP, STEP, True)  # cold: the step over the share, 1.8e-3
+    assert PostureSettle(1e-3, True, np.array([0.5]), 0.0).settled(STEP, STEP, True)
+    assert not PostureSettle(1e-3, True, np.array([0.5]), 0.0).settled(STEP * 1.2, STEP * 1.2, True)
+
+
+def _warm_steps(*steps, carried: float | None = 0.0, converged=None) -> list[bool]:
+    """Each step's settled(), every step taken whole; ``converged``: the targets' state after each (default all)."""
+    settle = PostureSettle(1e-3, False, np.array([1.0]), carried)
+    return [settle.settled(s, s, c) for s, c in zip(steps, converged or [True] * len(steps))]
+
+
+BIG = np.array([4e-2, 1e-2, -2e-2])  # [rad]
+NEXT = np.array([4e-3, -3e-3, 1e-3])  # a tenth of BIG's largest DOF: the next one estimated at 4e-4
+
+
+def test_a_warm_attempt_whose_whole_steps_contract_settles_without_the_verifying_step():
+    assert _warm_steps(BIG, NEXT) == [False, True]  # started with a target off: the ratio still estimates the next
+    assert _warm_steps(BIG, NEXT, carried=None) == [False, False]  # cold: a step within the tolerance is needed
+    assert _warm_steps(BIG, NEXT, converged=[True, False]) == [False, False]  # a target off after it
+
+
+def test_a_contraction_too_slow_or_estimated_above_the_tolerance_goes_on():
+    assert _warm_steps(BIG, BIG * 0.6) == [False, False]  # above CONTRACTION: not a linear close-in yet
+    assert _warm_steps(BIG, NEXT * 3.0) == [False, False]  # 0.3 x 1.2e-2: 3.6e-3 still to come
+    assert _warm_steps(BIG, NEXT, carried=0.8) == [False, False]  # the last attempt ended on a slow mode
+
+
+def test_a_halved_or_refused_step_estimates_nothing():
+    settle = PostureSettle(1e-3, True, np.array([1.0]), 0.0)
+    assert not settle.settled(BIG, BIG, True)
+    assert not settle.settled(NEXT * 2.0, NEXT * 0.4, True)  # halved twice: 8e-3 full, no ratio to BIG
+    assert not settle.settled(NEXT, NEXT, True)  # its ratio to a step not taken whole is unknown
+    assert settle.contraction == pytest.approx(0.0)
+
+
 MOVE = np.array([3e-2, -1e-2, 2e-2])  # a posture move [rad], far above the tolerance
 
 
@@ -65,23 +102,24 @@ def test_moves_that_turn_or_are_not_the_posture_move_leave_the_share_as_it_is():
     assert _gain_after(MOVE, -MOVE, gain=0.5, step_scale=0.4) == 0.5  # each move under half its full step
 
 
-def _drag(biped, frames: int, **settings) -> tuple[list, gsik.control.Posture]:
-    """Warm solves of a short drag: pelvis and left foot held, both hands pulled and moved round a circle at priority
-    0, the pulled pose as the posture (bench_drag's "posture, hands at 0"): every frame's result, and the posture."""
+def _drag(biped, frames: int, priority: int = 0, **settings) -> tuple[list, gsik.control.Posture]:
+    """Warm solves of a short drag: pelvis and left foot held, both hands pulled and moved round a circle at
+    ``priority``, the pulled pose as the posture (bench_drag's "posture, hands at 0", at 1 its "pins"): every frame's
+    result, and the posture."""
     solver = gsik.Solver(biped, **settings)
     rest = solver.effector_poses()
 
-    def targets(frame):
+    def targets(frame, priority=0):
         out = {n: gsik.Target.from_transform(rest[n]) for n in ("pelvis", "left_foot")}
         angle = 2.0 * np.pi * frame / 100
         for hand in ("left_hand", "right_hand"):
             moved = [0.1 * (np.cos(angle) - 1.0), 0.15, 0.1 * np.sin(angle)]
-            out[hand] = gsik.Target(rest[hand][:3, 3] + moved, position_only=True)
+            out[hand] = gsik.Target(rest[hand][:3, 3] + moved, position_only=True, priority=priority)
         return out
 
     solver.solve(targets(0))
     solver.set_posture(solver.q)
-    return [solver.solve(targets(f)) for f in range(1, frames + 1)], solver.posture
+    return [solver.solve(targets(f, priority)) for f in range(1, frames + 1)], solver.posture
 
 
 def _posture_cost(posture, q) -> float:
@@ -97,6 +135,21 @@ def test_a_settled_posture_ends_warm_solves_sooner_with_the_targets_met_and_the_
     assert sum(r.iterations for r in on) < sum(r.iterations for r in off)
     for a, b in zip(on, off):  # the posture no worse than 1% of its cost with the test off
         assert _posture_cost(posture, a.q) <= 1.01 * _posture_cost(posture, b.q)
+
+
+def test_warm_solves_skip_the_verifying_step_with_the_targets_met_and_the_posture_kept(biped, monkeypatch):
+    """The pins' drag (hands at 1): the warm settle test (a contraction's estimate) against the cold one in every
+    attempt, and against the test off."""
+    warm, posture = _drag(biped, 8, priority=1)
+    off, _ = _drag(biped, 8, priority=1, posture_tolerance=0.0)
+    monkeypatch.setattr(gsik.attempts, "PostureSettle",
+                        lambda tolerance, converged, gain, contraction=None: PostureSettle(tolerance, converged, gain))
+    cold, _ = _drag(biped, 8, priority=1)
+    assert all(r.status is gsik.Status.CONVERGED for r in warm + cold + off)
+    assert sum(r.iterations for r in warm) < sum(r.iterations for r in cold) < sum(r.iterations for r in off)
+    for a, b in zip(warm, off):
+        assert _posture_cost(posture, a.q) <= 1.01 * _posture_cost(posture, b.q)
+        np.testing.assert_allclose(a.q, b.q, atol=0.005)  # [rad]
 
 
 def test_a_step_ignores_the_posture_tolerance(biped):
