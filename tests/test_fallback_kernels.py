@@ -2,6 +2,8 @@
 replaces: the same drags, step for step, bit for bit (angles, statistics, damping, the full step)."""
 
 import collections
+import gc
+import sys
 
 import numpy as np
 import pytest
@@ -154,3 +156,25 @@ def test_a_refusal_raises_the_damping_to_its_largest_and_then_holds():
     lam[0] = 3.0
     fallback._refuse(fallback.V_SAME, lam, 3.0, posture, costs, met, cache, window)
     assert lam[0] == 3.0 and cache.out[gsik.kernels.accept.R_CREEPS] == 1.0  # unchanged: held, damping kept
+
+
+def test_the_uncounted_kernels_neither_keep_nor_drop_a_reference():
+    """The controlled step's kernels compiled without numba's reference counting (``_nrt=False``) hold the
+    controller's buffers as before after hundreds of steps (committed, refused, gathered): a count kept would leak
+    them, one dropped would free them under the compiled code."""
+    solver = gsik.Solver(gsik.load_skeleton("biped"))
+    use_prior(solver, bundled_prior("biped"))
+    poses = solver.effector_poses()
+    solver.step(studio_drag_targets(poses, 0))
+    controller = solver._controller
+    held = []
+    for frames in (1, 100):  # the first round makes the held compiled calls (which hold the buffers) once
+        for f in range(frames):
+            solver.step(studio_drag_targets(poses, f))
+        solver.solve()
+        gc.collect()
+        held.append([sys.getrefcount(a) for a in (*controller._cache, *controller._work, *controller._window,
+                                                  *controller._tasks_in, *controller._posture_rows)])
+    assert solver._controller is controller
+    assert held[1] == held[0]
+    assert np.isfinite(solver.q).all()

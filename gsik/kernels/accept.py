@@ -28,6 +28,7 @@ from gsik.control_inputs import ControlStats
 from gsik.kernels import priority
 from gsik.kernels.control import O_CONVERGED, O_LAGGING, O_STATUS, O_TARGET_COST, box, level_state, linearise, \
     step_trial, trial
+from gsik.kernels.step import copy_into, copy_rows, take_frames
 from gsik.stall import STALL_PROGRESS, STALL_SHRINK, STALL_WINDOW
 
 #: Verdict codes of :func:`compare_levels`: :data:`gsik.acceptance.BETTER`, ``SAME``, ``WORSE`` in that order.
@@ -144,7 +145,7 @@ def make_window(tolerance_norms: np.ndarray) -> StallWindow:
                        np.zeros(2, dtype=np.int64))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def norm(v):
     """``sqrt(sum(v ** 2))`` [rad] of a step ``v`` (n,), summed in order: every controlled step's norm, whether the
     compiled call committed it (:func:`commit`) or the controller's Python branches did, is this one sum."""
@@ -154,7 +155,7 @@ def norm(v):
     return math.sqrt(s)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def compare_levels(c0, anchors, met0, c1, met1, floors, settle, upto):
     """``(V_BETTER | V_SAME | V_WORSE, deciding level)`` of a trial (costs ``c1``, met ``met1``) against its start
     (``c0``, ``anchors``, ``met0``), levels ``[0, upto)`` (:func:`gsik.acceptance.compare`'s rule, bit for bit)."""
@@ -175,7 +176,7 @@ def compare_levels(c0, anchors, met0, c1, met1, floors, settle, upto):
     return (V_BETTER if tightened and not loosened else V_SAME), upto
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def anchor_into(before, costs, decided, out):
     """``out`` (L + 1,) = ``minimum(before, costs)``, and ``costs`` from level ``decided`` on
     (:func:`gsik.acceptance.anchored`; a NaN either side stays NaN, as NumPy's minimum)."""
@@ -189,14 +190,14 @@ def anchor_into(before, costs, decided, out):
             out[k] = a if a < c else c
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def reset(window):
     """Forget the steps so far."""
     window.ring[0] = 0
     window.ring[1] = 0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def creeps(window, met, posture_on, costs):
     """:meth:`gsik.stall.StallDetector.creeps` on ``window``, with the unmet levels from ``met`` (K,) (the posture's,
     last, unmet while on: :func:`gsik.stall.unmet_levels`) and the levels' ``costs`` (K,) after this step."""
@@ -242,16 +243,24 @@ def creeps(window, met, posture_on, costs):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def is_fresh(cache, q, W):
     """True if the cache holds a state for exactly ``q`` (n,) and ``W`` (4, 4) (bit for bit, as ``tobytes``)."""
     if cache.flags[F_VALID] == 0.0:
         return False
-    return _same_bits(cache.q, q) and _same_bits(cache.W.reshape(-1), W.reshape(-1))
+    if not _same_bits(cache.q, q):
+        return False
+    a, b = cache.W.view(np.int64), W.view(np.int64)
+    for i in range(4):
+        for j in range(4):
+            if a[i, j] != b[i, j]:
+                return False
+    return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _same_bits(a, b):
+    """True if ``a`` and ``b`` (n,) hold the same bits."""
     a, b = a.view(np.int64), b.view(np.int64)
     for d in range(a.shape[0]):
         if a[d] != b[d]:
@@ -259,7 +268,7 @@ def _same_bits(a, b):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, lam, damping, base, near,
                  tols, floors, rule, restoring, stall_tolerance, cache, window, wk):
     """One prioritised step without balance from ``q`` (n,) [rad] (frames ``R``, ``p``; ``lam`` (1,) the adaptive
@@ -290,7 +299,7 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     out[R_STATUS] = wk.out[O_STATUS]
     if wk.out[O_STATUS] != priority.OK:
         return
-    cache.dq0[:] = wk.dq  # the first step, kept for halving it and for first_step()
+    copy_into(cache.dq0, wk.dq)  # the first step, kept for halving it and for first_step()
     verdict, decided = compare_levels(c0, anchors0, met0, wk.costs, wk.met, floors, settle, floors.shape[0])
     out[R_RESTORED] = 0.0
     if verdict == V_WORSE and restoring > 0:
@@ -306,7 +315,7 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
                window, wk)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tolerance, cache, window, wk):
     """Commit the trial in ``wk``: ``q``, ``R``, ``p`` moved to it (``cache.moved`` the change), anchored from
     ``anchors0`` at level ``decided`` into ``cache``, ``lam[0]`` set to ``max(lowered, low)`` (Python's order), and
@@ -318,12 +327,11 @@ def commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tole
         cache.moved[d] = wk.q[d] - q[d]
         q[d] = wk.q[d]
         cache.q[d] = wk.q[d]
-    R[:] = wk.R
-    p[:] = wk.p
-    cache.W[:] = W
-    cache.costs[:] = wk.costs
-    cache.met[:] = wk.met
-    cache.e[:] = wk.e
+    take_frames(R, p, wk.R, wk.p)
+    copy_rows(cache.W, W)
+    copy_into(cache.costs, wk.costs)
+    copy_into(cache.met, wk.met)
+    copy_into(cache.e, wk.e)
     cache.flags[F_VALID] = 1.0
     cache.flags[F_CONVERGED] = wk.out[O_CONVERGED]
     cache.flags[F_TARGET_COST] = wk.out[O_TARGET_COST]
@@ -338,7 +346,7 @@ def commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tole
         out[R_CREEPS] = 0.0  # held by its norm alone: the window is not asked
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, near, tols, restoring, c0, anchors0,
              met0, floors, settle, wk):
     """Up to ``restoring`` steps of the target levels (the first ``L`` packed levels, ``near`` (L,)) linearised at

@@ -18,6 +18,9 @@ rows, filled by the caller, where it sits), then the posture's rows. Balance's s
 numba's cache checks a kernel against its own file only: the compiled strict-priority step
 (:mod:`gsik.kernels.priority`) is inside this module's cached kernels, and a change to that file alone leaves them
 stale (delete ``gsik/kernels/__pycache__/*.nb[ic]`` after one).
+The kernels here, in :mod:`gsik.kernels.accept`, :mod:`gsik.kernels.fallback` and :mod:`gsik.kernels.gather`
+allocate nothing and are compiled without numba's reference counting (``_nrt=False``, as in
+:mod:`gsik.kernels.kinematics`): they copy arrays by loops (:func:`gsik.kernels.step.copy_into`).
 """
 
 from __future__ import annotations
@@ -146,7 +149,7 @@ def make_work(n_frames: int, n_dofs: int, n_tasks: int, n_packed: int, n_levels:
                        np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(5), np.zeros(n))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def level_state(tasks, posture, q, R, p, e, err, M, costs, met):
     """Every level's state at ``q`` (n,) [rad] with world frames ``R``, ``p``: the error rows ``e`` (6m,), the tasks'
     errors ``err`` (2, m), ``costs`` (L + 1,) ``0.5 e^T W e`` per level and the posture's ``0.5 |L (q - ref)|^2``
@@ -184,7 +187,7 @@ def level_state(tasks, posture, q, R, p, e, err, M, costs, met):
     return converged, target, lagging
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def report_errors(R, p, tasks, index, e, err, M, out):
     """The tasks' errors at frames ``R``, ``p`` (:func:`~gsik.kernels.kinematics.effector_errors` into ``e``,
     ``err``) as a result reports them: ``out`` (2, k) position [m] and orientation [rad] errors of task ``index[j]``
@@ -196,7 +199,7 @@ def report_errors(R, p, tasks, index, e, err, M, out):
         out[1, j] = err[1, k] if k >= 0 and tasks.row_weight[k, 3] > 0.0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def linearise(task_model, tasks, posture, q, R, p, e, wk):
     """The levels linearised at ``q`` (n,) [rad] (frames ``R``, ``p``; error rows ``e`` (6m,)) packed into ``wk.rows``,
     ``wk.errors``, ``wk.weights``: each target row's Jacobian row, error and weight, then the posture's rows ``L`` and
@@ -222,7 +225,7 @@ def linearise(task_model, tasks, posture, q, R, p, e, wk):
         wk.weights[mt + i] = 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def box(q, q_from, lower, upper, max_step, lo, hi):
     """Bounds ``lo <= dq <= hi`` (n,) of a step from ``q_from``: the limits, and the step limit ``max_step`` [rad]
     (0: none) counted from ``q``; always ``lo <= 0 <= hi``."""
@@ -236,7 +239,7 @@ def box(q, q_from, lower, upper, max_step, lo, hi):
         hi[d] = max(b, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def dampings_into(costs, near, lam, base, posture_on, out):
     """Each packed level's damping into ``out``: ``min(base, lam)`` for a level whose cost (``costs`` (L + 1,)) is
     within ``near`` (L,), ``lam`` for the others; the posture's ``base * max(1, lam / base)``."""
@@ -246,7 +249,7 @@ def dampings_into(costs, near, lam, base, posture_on, out):
         out[near.shape[0]] = base * max(1.0, lam / base)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def trial(fk, tasks, posture, root, W, lower, upper, q, dq, scale, wk):
     """The trial ``wk.q = clip(q + scale dq, lower, upper)``: its frames, errors and level state into ``wk``
     (``wk.out``'s :data:`O_CONVERGED`, :data:`O_TARGET_COST` and :data:`O_LAGGING`). ``fk``: the whole skeleton's
@@ -261,7 +264,7 @@ def trial(fk, tasks, posture, root, W, lower, upper, q, dq, scale, wk):
     wk.out[O_LAGGING] = 1.0 if lagging else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, e, costs, lam, base, near,
                tols, wk):
     """One prioritised step from ``q`` (n,) [rad] (frames ``R``, ``p``, error rows ``e``, level ``costs`` there) and

@@ -54,7 +54,7 @@ DAMPING_RAISE = 10.0
 HALVINGS = 3
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, lam, damping, base, near,
                  tols, floors, rule, restoring, stall_tolerance, cache, window, wk):
     """One prioritised step without balance from ``q`` (n,) [rad], every branch compiled: the full step
@@ -68,7 +68,7 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
                 tols, floors, rule, restoring, stall_tolerance, cache, window, wk)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def step_end(cache):
     """``(status, committed, held or creeps, converged, targets' cost, lagging, step norm [rad])`` of the step
     :func:`control_step` made (floats, 1.0 / 0.0 for flags). Committed: the third is ``R_CREEPS`` (-1: the caller's
@@ -81,7 +81,7 @@ def step_end(cache):
     return out[R_STATUS], 0.0, out[R_CREEPS], out[R_CONVERGED0], out[R_TARGET_COST0], out[R_LAGGING0], 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _start(cache):
     """``(costs, anchors, met, error rows)`` of the step's start state: the cache's when it was fresh, else the
     ``*0`` buffers :func:`gsik.kernels.accept.control_step` evaluated (anchored at their own costs)."""
@@ -90,7 +90,7 @@ def _start(cache):
     return cache.costs0, cache.costs0, cache.met0, cache.e0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def refused(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, lam, damping, base, near, tols,
             floors, rule, restoring, stall_tolerance, cache, window, wk):
     """The fallback of a full step whose trial (in ``wk``, judged ``cache.out[R_VERDICT]``) is no better: a worse
@@ -114,7 +114,7 @@ def refused(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, 
     _refuse(verdict, lam, damping, posture, c0, met0, cache, window)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def settles(cache, posture):
     """True if the full step ``cache.dq0`` settles a solve()'s posture (:class:`gsik.stall.PostureSettle`'s test,
     ``cache.settle[0]`` its tolerance [rad], > 0): every target within its tolerances at the start pose, and no DOF
@@ -135,7 +135,7 @@ def settles(cache, posture):
     return full <= tolerance * posture.gain[0]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _refuse(verdict, lam, damping, posture, c0, met0, cache, window):
     """A refused step: ``lam[0]`` raised after a worse trial; held (``R_CREEPS``) when the trial changed nothing,
     the damping is the largest, or the stall window (asked last, as the Python branches do) says it creeps; the start
@@ -152,7 +152,7 @@ def _refuse(verdict, lam, damping, posture, c0, met0, cache, window):
         out[R_LAGGING0] = cache.flags[F_LAGGING]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _retry(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, near, tols, floors, settle,
            restoring, c0, anchors0, met0, e0, cache, wk):
     """``(verdict, deciding level, halvings made)`` of the retries of a worse full step ``cache.dq0`` from ``q``
@@ -193,7 +193,7 @@ def _retry(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R
     return V_WORSE, 0, HALVINGS
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _correctable(c0, met0, floors, L):
     """The first unmet level ``k`` (of ``L`` target levels) when the met levels above it may tighten (one's cost
     ``c0`` above its ``floors``), else 0 (``gsik.control.Controller._correction``'s test)."""
@@ -208,7 +208,7 @@ def _correctable(c0, met0, floors, L):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _levels_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, e0, levels, tols, wk):
     """The step of the first ``levels`` packed levels alone, linearised at ``q`` (frames ``R``, ``p``, error rows
     ``e0``) with the full step's dampings, and its trial into ``wk``. Returns the step kernel's status."""

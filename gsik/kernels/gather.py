@@ -20,7 +20,7 @@ from gsik.kernels.accept import F_VALID
 SAME, MOVED, DECLINED = 0, 1, 2
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def gather_targets(position, rotation, row_weight, index, tp, tR, row_w, flags, ring):
     """Row ``index[k]`` of the packed targets (``position`` (e, 3) [m], ``rotation`` (e, 3, 3), ``row_weight`` (e, 6))
     into task ``k`` of ``tp`` (m, 3), ``tR`` (m, 3, 3), if every packed row's weights are ``row_w`` (m, 6) bit for bit.
@@ -61,7 +61,7 @@ def gather_targets(position, rotation, row_weight, index, tp, tR, row_w, flags, 
     return MOVED
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def gather_result(q, err, index, out):
     """A result's angles and errors into ``out`` (n + 2k,): ``q`` (n,) [rad], then the position [m] and the
     orientation [rad] errors of ``k`` frames from the tasks' errors ``err`` (2, m): ``err[a, index[a, j]]``, 0

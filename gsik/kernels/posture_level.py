@@ -20,6 +20,10 @@ largest row norm (at most ``sigma_max(L)``). Both are then the same step up to r
   (:func:`gsik.kernels.priority._without_dof`) and that direction dropped: ``Z^T P`` and ``N`` are turned by the
   same reflection in ``O(rz n)`` and ``O(rz^2)`` and the level re-solved by an ``rz x rz`` Cholesky factorisation, not
   factored from scratch.
+
+The level's kernels allocate nothing and are compiled without numba's reference counting (``_nrt=False``, as in
+:mod:`gsik.kernels.kinematics`); :func:`prioritized_step_posture` allocates the step's buffers and says ``_nrt=True``
+(see :mod:`gsik.kernels.priority`).
 """
 
 from __future__ import annotations
@@ -58,7 +62,7 @@ def normal_matrix(factor: np.ndarray) -> np.ndarray:
     return P
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=True)
 def prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, normal,
                              dq):
     """:func:`gsik.kernels.priority.prioritized_step` whose last level is a posture with the normal matrix
@@ -83,7 +87,7 @@ def prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, ra
     return priority.OK
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _posture_level(wk, rows, errors, start, stop, P, z0, rz, dq, lo, hi, damping, box_tol, box_rel_tol):
     """The posture level's active-set loop on ``dq`` (and ``wk.locked``) in the free basis ``wk.Zt[z0:z0 + rz]``.
 
@@ -127,7 +131,7 @@ def _posture_level(wk, rows, errors, start, stop, P, z0, rz, dq, lo, hi, damping
             return
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _basis_times(Zt, z0, rz, P, ZP):
     """``ZP[:rz, :n] = Zt[z0:z0 + rz] @ P``: four rows a pass, each a sweep ``ZP[c] += Zt[z0 + c, d] * P[d]`` over
     ``d`` in order, skipping the DOFs the pass' directions do not move (the basis' rows are sparse: the directions no
@@ -163,7 +167,7 @@ def _basis_times(Zt, z0, rz, P, ZP):
                     a[j] += zc * row[j]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _gram(ZP, Zt, z0, rz, N):
     """``N[:rz, :rz] = ZP[:rz] @ Zt[z0:z0 + rz]^T`` (``Z^T P Z``), symmetric: the lower triangle computed, mirrored."""
     n = Zt.shape[1]
@@ -174,7 +178,7 @@ def _gram(ZP, Zt, z0, rz, N):
             N[c2, c] = v
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _damped_solve(wk, g, ZP, N, z0, rz, dq, damping):
     """``wk.y`` (rz,) solving ``(N + damping I) y = Z^T g - (Z^T P) dq``; False if that matrix is not numerically
     positive definite."""
@@ -188,7 +192,7 @@ def _damped_solve(wk, g, ZP, N, z0, rz, dq, damping):
     return _cholesky_solve(G, y, rz)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _turn(N, rz, u, scale, w):
     """``N[:rz - 1, :rz - 1] = (H N H)[1:, 1:]`` with ``H = I - scale u u^T`` (``u`` (rz,)): ``Z^T P Z`` after
     :func:`gsik.kernels.priority._without_dof` turned the basis by ``H`` and dropped its first direction. ``w``:

@@ -28,7 +28,7 @@ from gsik.kernels.posture_level import _posture_level, prioritized_step_posture
 POSTURE_SHARE = 0.07
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=True)
 def bounded_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, normal, bound, dq,
                  below):
     """:func:`~gsik.kernels.posture_level.prioritized_step_posture` (same arguments before ``bound``, ``dq`` (n,)

@@ -16,6 +16,11 @@ Every matrix a reflection turns is stored with the reflected index first (``A^T`
 rows transposed, the basis as rows): a reflection is then two sweeps of ``x += a * row`` over contiguous rows, which
 LLVM turns into vector operations, instead of one short dot product per row (a chain of dependent adds; about three
 times slower at these sizes).
+
+The kernels that allocate nothing are compiled without numba's reference counting (``_nrt=False``, as in
+:mod:`gsik.kernels.kinematics`). Those that allocate the step's buffers (:func:`make_work`, :func:`begin`,
+:func:`prioritized_step`) say ``_nrt=True``: a kernel that leaves it unset inherits its caller's setting when
+compiled from one (:mod:`gsik.kernels.control`'s uncounted kernels call them).
 """
 
 from __future__ import annotations
@@ -69,7 +74,7 @@ class Work(NamedTuple):
     span: np.ndarray
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=True)
 def make_work(n, m):
     """A :class:`Work` (uninitialised but ``locked``, all False): one allocation, cut."""
     sizes = (n * n, n * n, n * n, n * m, n * m, n * m, m, m, m, m, m, n, n, n, n, n, n)
@@ -84,7 +89,7 @@ def make_work(n, m):
                 np.empty((2, n), dtype=np.int64))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=True)
 def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq):
     """Strict-priority damped least squares within ``lo <= dq <= hi``, into ``dq`` (n,) [rad].
 
@@ -108,7 +113,7 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
     return status
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=True)
 def begin(starts, dampings, lo, dq):
     """``(wk, last)``: the :class:`Work` for these levels and the last level with rows (-1: none); ``dq`` zeroed."""
     m_max = 0
@@ -121,7 +126,7 @@ def begin(starts, dampings, lo, dq):
     return make_work(lo.shape[0], m_max), last
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, stop, last, dq):
     """Levels ``0 ... stop - 1`` into ``dq`` (the free basis kept below each level before ``last``); returns
     ``(status, z0, rz, identity)``: :data:`OK` or :data:`NOT_FINITE`, and the free basis left (``wk.Zt``'s rows
@@ -140,14 +145,14 @@ def solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
     return OK, z0, rz, identity
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def clip(dq, lo, hi):
     """``dq`` (n,) clipped into the box (rounding only: the levels keep it there)."""
     for d in range(dq.shape[0]):
         dq[d] = min(max(dq[d], lo[d]), hi[d])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _weigh(rows, errors, weights, start, stop, JwT, ew, norm2, span):
     """``JwT = (sqrt(w) J)^T``, ``ew = sqrt(w) e`` of rows ``start:stop``, ``norm2`` their squared row norms,
     ``span`` the nonzero columns of each row of ``JwT`` (a posture's diagonal factor: one each); returns their
@@ -172,7 +177,7 @@ def _weigh(rows, errors, weights, start, stop, JwT, ew, norm2, span):
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _project(JwT, m, Zt, z0, rz, identity, AT0, norm2, span):
     """``AT0 = (J Z)^T`` (rz, m), over the nonzeros of ``Z`` and of ``J``'s columns (``span``; a zero's product adds
     exactly nothing); returns the largest row norm of ``J`` (``norm2``: (m,) its squares), not finite if ``AT0`` or
@@ -200,7 +205,7 @@ def _project(JwT, m, Zt, z0, rz, identity, AT0, norm2, span):
     return math.sqrt(scale) if math.isfinite(total) else math.nan
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_tol, box_rel_tol, basis_needed):
     """One level's active-set loop on ``dq`` (and ``wk.locked``); returns the free basis left below it
     ``(z0, rz, identity)`` (only when ``basis_needed``: else as it stood)."""
@@ -237,7 +242,7 @@ def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_to
             return z0, rz, identity
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _active_first(wk, m, z0, rz, identity):
     """The live directions this level's rows do not see (``AT0``'s rows exactly zero: a DOF none of its rows moves)
     moved behind the others, rows of ``AT0`` and ``Zt`` alike; returns ``(ra, identity)``: the directions it sees
@@ -269,7 +274,7 @@ def _active_first(wk, m, z0, rz, identity):
     return ra, identity
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _identity_into(Zt, n):
     for i in range(n):
         for d in range(n):
@@ -277,7 +282,7 @@ def _identity_into(Zt, n):
         Zt[i, i] = 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _factor(wk, m, rz, dq, pivot_tol):
     """The pivoted QR of ``A^T`` (``wk.AT0``, (rz, m)) into ``wk.AT``, and the residual ``r = e - J dq`` into
     ``wk.res``.
@@ -324,7 +329,7 @@ def _factor(wk, m, rz, dq, pivot_tol):
     return min(m, rz)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _reflect_pivot(AT, j, rz, V, beta):
     """The reflection ``I - beta[j] v v^T`` (``v = V[j, j:rz]``) that maps ``AT[j:rz, j]`` onto its first axis."""
     s2 = 0.0
@@ -340,7 +345,7 @@ def _reflect_pivot(AT, j, rz, V, beta):
         AT[i, j] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _damped_solve(wk, m, k, damping):
     """``wk.y`` (k,) solving ``(R_k R_k^T + damping I) y = R_k P^T r``; returns ``k``, lowered while that matrix is
     not numerically positive definite (only without damping, at a level all but rank-deficient)."""
@@ -357,7 +362,7 @@ def _damped_solve(wk, m, k, damping):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _step_from(wk, k, rz, z0, identity):
     """``wk.step = Z Q [y; 0]`` (n,) over the first ``rz`` live directions, zero on the locked DOFs."""
     z, step = wk.z, wk.step
@@ -380,7 +385,7 @@ def _step_from(wk, k, rz, z0, identity):
             step[d] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _into_box(dq, lo, hi, box_tol):
     """``dq`` clipped into the box and put on a bound where within ``box_tol`` of it (rounding only: every DOF on a
     bound then has room 0 exactly, and ties go by index, not by rounding)."""
@@ -393,7 +398,7 @@ def _into_box(dq, lo, hi, box_tol):
         dq[d] = v
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _largest_fraction(dq, step, lo, hi, box_tol, box_rel_tol):
     """The largest ``alpha <= 1`` keeping ``dq + alpha * step`` in the box (widened by ``box_tol`` and ``box_rel_tol``
     times the step's largest component), and the DOF that blocks (-1: none)."""
@@ -415,7 +420,7 @@ def _largest_fraction(dq, step, lo, hi, box_tol, box_rel_tol):
     return max(best, 0.0), blocking
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _null_basis(wk, k, ra, z0):
     """The free basis below this level, ``(Z Q)^T`` with ``Q = H_0 ... H_(k-1)``: the reflections applied to the
     ``ra`` directions the level sees (rows of ``wk.Zt`` from ``z0``) in place, first to last; rows from ``z0 + k`` on
@@ -437,7 +442,7 @@ def _null_basis(wk, k, ra, z0):
         reflect(Zt, z0, wk.V, j, wk.beta[j], j, ra, first, end, wk.zw)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _without_dof(Zt, z0, rz, dof, u, w):
     """Turn the live rows of ``Zt`` by the reflection ``I - scale u u^T`` (``u`` (rz,) filled here) so that only the
     first moves DOF ``dof``; returns ``scale`` (the caller then drops that row), or 0 when no row moves it.
@@ -468,7 +473,7 @@ def _without_dof(Zt, z0, rz, dof, u, w):
     return scale
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _reflect_rows(AT0, m, rz, u, scale, w):
     """``AT0 = ((I - scale u u^T) AT0)[1:]``: ``(J Z)^T`` after :func:`_without_dof` turned ``Z``, without the
     product. ``w``: (m,) scratch."""
