@@ -41,6 +41,19 @@ except ImportError:  # pragma: no cover - exercised only without numba
 _warned: set[str] = set()
 
 
+def _has_nrt_option() -> bool:
+    """True if this numba takes the private ``_nrt`` option (``_nrt=False``: a kernel that allocates nothing skips
+    the reference counts of the arrays it is given; :mod:`gsik.kernels.kinematics`)."""
+    try:
+        from numba.core.cpu import CPUTargetOptions
+    except ImportError:  # pragma: no cover - a numba whose options moved
+        return False
+    return hasattr(CPUTargetOptions, "_nrt")
+
+
+_NRT_OPTION = _numba_njit is not None and _has_nrt_option()
+
+
 def _warn_once(key: str, message: str) -> None:
     if key not in _warned:
         _warned.add(key)
@@ -198,6 +211,8 @@ def python_function(kernel):
 def _compile(func, options: dict):
     if options.get("cache"):
         setattr(func, _KERNEL_MARK, True)  # stamped with the package's kernel sources (see the module's docstring)
+    if not _NRT_OPTION:  # a private option numba may drop: the same results, reference counted
+        options = {k: v for k, v in options.items() if k != "_nrt"}
     try:
         return _numba_njit(**options)(func)
     except RuntimeError as exc:

@@ -9,6 +9,8 @@ import textwrap
 import numpy as np
 import pytest
 
+from gsik import _jit
+
 # Run in a fresh process: numba picks a cache folder per kernel when the kernel module is imported.
 _SOLVE = """
 import warnings
@@ -99,3 +101,23 @@ def test_without_the_compiler_the_kernels_run_as_python_with_the_compiled_result
     assert converged == "True"
     _, q_compiled = _both_paths(tmp_path)
     np.testing.assert_allclose(q_python, q_compiled, atol=1e-9)
+
+
+def _recorded_options(monkeypatch, nrt_option: bool) -> dict:
+    seen = {}
+
+    def fake_njit(**options):
+        seen.update(options)
+        return lambda f: f
+
+    monkeypatch.setattr(_jit, "_numba_njit", fake_njit)
+    monkeypatch.setattr(_jit, "_NRT_OPTION", nrt_option)
+    kernel = _jit.njit(_nrt=False, fastmath=False)(lambda x: x + 1)
+    assert kernel(1) == 2
+    return seen
+
+
+def test_the_private_nrt_option_reaches_numba_only_where_numba_has_it(monkeypatch):
+    assert _recorded_options(monkeypatch, True) == {"_nrt": False, "fastmath": False}
+    assert _recorded_options(monkeypatch, False) == {"fastmath": False}
+
