@@ -119,7 +119,7 @@ def test_step_and_trial_match_the_svd_step_and_forward_kinematics(problem, biped
     bound, largest = c._posture_rows.share[0], np.abs(full - below).max()
     scale = bound / largest if 0.0 < bound < largest else 1.0
     np.testing.assert_allclose(dq, below + scale * (full - below), atol=1e-7)
-    assert (bound > 0.0) == (posture.precision.ndim == 2)
+    assert (bound > 0.0) == (posture.precision.ndim == 2 and ck.POSTURE_SHARE > 0.0)
     q2 = np.clip(q + dq, biped.lower, biped.upper)
     np.testing.assert_array_equal(wk.q, q2)
     R2, p2 = world_frames(biped, q2, W, biped.root)
@@ -174,9 +174,10 @@ def test_tracking_steps_keep_a_dragged_hand_within_1_mm_where_one_linearisation_
     assert solver.step().iterations == 1  # nothing lags: one linearisation
 
 
-def test_the_prior_s_bounded_share_keeps_the_hands_in_one_linearisation_without_restoring(biped):
-    """The same frame with the prior's share of the step bounded (the default): one linearisation keeps both hands
-    within 1 mm and the pins within 0.1 mm, and its full step is accepted without a restoring step."""
+def test_the_prior_s_bounded_share_keeps_the_hands_in_one_linearisation_without_restoring(biped, monkeypatch):
+    """The same frame with the prior's share of the step bounded (0.07 rad; off by default): one linearisation keeps
+    both hands within 1 mm and the pins within 0.1 mm, and its full step is accepted without a restoring step."""
+    monkeypatch.setattr(ck, "POSTURE_SHARE", 0.07)
     one, solver = _drag_frame1(biped, 1)
     assert solver._controller._posture_rows.share[0] == ck.POSTURE_SHARE > 0.0
     assert one.iterations == 1
@@ -185,11 +186,13 @@ def test_the_prior_s_bounded_share_keeps_the_hands_in_one_linearisation_without_
     assert solver._controller._cache.out[ak.R_RESTORED] == 0.0 and solver._controller._cache.out[ak.R_COMMITTED]
 
 
-def test_a_solve_s_settling_steps_leave_the_prior_s_share_unbounded(problem):
-    """While a solve()'s posture settles (its own gain scales the posture's step) the share is not bounded; after,
-    a full factor's is again (a diagonal one's never)."""
+def test_a_solve_s_settling_steps_leave_the_prior_s_share_unbounded(problem, monkeypatch):
+    """With a bound set: while a solve()'s posture settles (its own gain scales the posture's step) the share is not
+    bounded; after, a full factor's is again (a diagonal one's never)."""
     c, _, _, _, _, _, posture = problem
-    bounded = ck.POSTURE_SHARE if posture.precision.ndim == 2 else 0.0
+    monkeypatch.setattr(ck, "POSTURE_SHARE", 0.07)
+    c.settle_steps(0.0)
+    bounded = 0.07 if posture.precision.ndim == 2 else 0.0
     assert c._posture_rows.share[0] == bounded
     c.settle_steps(1e-3)
     assert c._posture_rows.share[0] == 0.0

@@ -6,6 +6,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from gsik.kernels import control as control_kernels
 from gsik.kernels import priority as priority_kernel
 from gsik.kernels.control import posture_rows
 from gsik.kernels.posture_level import prioritized_step_posture
@@ -86,10 +87,12 @@ def test_a_bounded_share_leaves_the_target_levels_linearised_errors_alone(rng):
         np.testing.assert_allclose(level.jacobian @ dq, level.jacobian @ below, rtol=0.0, atol=1e-12)
 
 
-def test_the_controller_bounds_a_full_posture_factor_only(rng):
-    """The learned prior's full factor gets the bound; a diagonal posture (pins, the retargeter) none, so its steps
-    and the bundled priors built with it stay bit for bit; no posture, none."""
+def test_the_controller_bounds_a_full_posture_factor_only(rng, monkeypatch):
+    """With a bound set, the learned prior's full factor gets it; a diagonal posture (pins, the retargeter) none, so
+    its steps and the bundled priors built with it stay bit for bit; no posture, none. Off by default."""
     n = 12
-    assert posture_rows(np.zeros(n), _full_factor(rng, n)).share[0] == POSTURE_SHARE
+    assert POSTURE_SHARE == 0.0 and posture_rows(np.zeros(n), _full_factor(rng, n)).share[0] == 0.0
+    monkeypatch.setattr(control_kernels, "POSTURE_SHARE", 0.07)
+    assert posture_rows(np.zeros(n), _full_factor(rng, n)).share[0] == 0.07
     assert posture_rows(np.zeros(n), posture_factor(np.full(n, 2.0))).share[0] == 0.0
     assert posture_rows(None, np.zeros((0, n))).share[0] == 0.0
