@@ -41,11 +41,11 @@ def _priority_loop(repeat, rows, errors, weights, starts, dampings, lo, hi, tols
 
 
 @njit
-def _posture_loop(repeat, rows, errors, weights, starts, dampings, lo, hi, tols, normal, dq):
+def _posture_loop(repeat, rows, errors, weights, starts, dampings, lo, hi, tols, normal, bound, dq, below):
     rank_tol, box_tol, box_rel_tol = tols
     for _ in range(repeat):
         posture_level.prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
-                                               box_rel_tol, normal, dq)
+                                               box_rel_tol, normal, bound, dq, below)
 
 
 @njit
@@ -83,7 +83,8 @@ def _pieces(solver, repeat: int) -> dict[str, float]:
         out[f"priority kernel, levels 0-{levels - 1}"] = _cpu_us(
             _priority_loop, repeat, *packed, tasks.starts[:levels + 1], wk.dampings[:levels], wk.lo, wk.hi, c._tols, dq)
     out["the step's kernel, all levels"] = _cpu_us(_posture_loop, repeat, *packed, tasks.starts, wk.dampings, wk.lo,
-                                                    wk.hi, c._tols, c._posture_rows.normal, dq)
+                                                    wk.hi, c._tols, c._posture_rows.normal,
+                                                    c._posture_rows.share[0], dq, wk.below)
     out["linearise"] = _cpu_us(_linearise_loop, repeat, c._task_model, tasks, c._posture_rows, q, R, p,
                                c._cache.e.copy(), wk)
     out["trial (FK + level state)"] = _cpu_us(_trial_loop, repeat, c._fk_model, tasks, c._posture_rows, c._root,

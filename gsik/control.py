@@ -10,17 +10,13 @@ angles and solves the levels in strict order (:func:`gsik.priority.prioritized_s
 3. the targets of priority 1, 2, ... in turn,
 4. the preferred posture (when on).
 
-A step is kept only if it leaves every level no worse, in order
-(:func:`gsik.acceptance.compare`). Otherwise it is halved, then refused and
-the damping raised (Levenberg-Marquardt, as the fast path does); a full step
-made worse only by the posture's move gives way to the target levels' step
-alone first. A level within its tolerances takes full Gauss-Newton steps (the
-base damping): it is a constraint to stay on, and a damping raised for a lower
-level must not stop it closing in. A step that changes nothing, or is refused
-at the largest damping, or ends a run of steps that only creep
-(:mod:`gsik.stall`), holds the pose (as a refused step of the fast path does),
-and holding is remembered, so a held target settles at its best reach instead
-of jittering, and a held step costs nothing.
+A step is kept only if it leaves every level no worse, in order (:func:`gsik.acceptance.compare`). Otherwise it is
+halved, then refused and the damping raised (Levenberg-Marquardt, as the fast path does); a full step made worse only by
+the posture's move gives way to the target levels' step alone first. A level within its tolerances takes full
+Gauss-Newton steps (the base damping): it is a constraint to stay on, and a damping raised for a lower level must not
+stop it closing in. A step that changes nothing, or is refused at the largest damping, or ends a run of steps that only
+creep (:mod:`gsik.stall`), holds the pose (as a refused step of the fast path does), and holding is remembered, so a
+held target settles at its best reach instead of jittering, and a held step costs nothing.
 
 A step without balance is one compiled call (:mod:`gsik.kernels.fallback` over :mod:`gsik.kernels.accept` and
 :mod:`gsik.kernels.control`, its fixed inputs held by one :mod:`gsik.kernels.step_inputs` object); this module keeps
@@ -318,7 +314,8 @@ class Controller(ControlTargets):
         # Held: nothing would change, the largest damping's step is refused, or the steps only creep (gsik.stall).
         held = s.adaptive_damping and (verdict == SAME or (accepted and step_norm <= s.stall_tolerance)
                                        or (not accepted and damping >= MAX_DAMPING) or self._call(
-                                           ak.creeps, self._window, state.met, self._posture is not None, state.costs))
+                                           ak.creeps_after, accepted and self._whole, self._posture_rows, self._work,
+                                           self._window, state.met, state.costs))
         return self._stats(q, W, lam, ControlStats(accepted, held, state.converged, state.target_cost, step_norm,
                                                    state.lagging))
 
@@ -353,10 +350,9 @@ class Controller(ControlTargets):
 
     def _committed(self, end: tuple) -> ControlStats:
         """The :class:`ControlStats` of a step :func:`~gsik.kernels.accept.control_step` committed (``end``: what
-        :func:`gsik.kernels.step_inputs.control_step` returns), as :func:`~gsik.kernels.accept.committed_stats` makes
-        them: held when the step's norm (:func:`gsik.kernels.step_inputs.norm`, as a step of the Python branches)
-        is at most the stall tolerance or the stall window says it creeps (asked here when the kernel left it to
-        that norm)."""
+        :func:`gsik.kernels.step_inputs.control_step` returns), as :func:`~gsik.kernels.accept.committed_stats`
+        makes them: held when the step's norm (:func:`gsik.kernels.step_inputs.norm`) is at most the stall tolerance
+        or the stall window says it creeps (asked here when the kernel left it to that norm)."""
         cache, tolerance = self._cache, self._settings.stall_tolerance
         _, _, crept, converged, target_cost, lagging, step_norm = end
         if crept < 0.0:
@@ -381,12 +377,13 @@ class Controller(ControlTargets):
         buffers), halved up to :data:`HALVINGS` times while its trial (:meth:`_judge`) is worse (with adaptive
         damping only); if it stays worse, the met levels' correction alone (:meth:`_correction`). Compiled:
         :func:`gsik.kernels.fallback.control_step`."""
-        scale = 1.0
+        scale, self._whole = 1.0, False  # whole: the full step's trial (restored or not) is the one returned
         for tries in range(HALVINGS + 1):
             if tries:
                 self._trial(q, dq, scale, W)
             trial = self._judge(q, W, state0)
             if trial[0][0] != WORSE or not self._settings.adaptive_damping:
+                self._whole = tries == 0
                 return tries, trial
             if tries == 0 and self._settles(state0, dq):
                 return tries, trial
@@ -398,11 +395,11 @@ class Controller(ControlTargets):
         return tries, self._correction(q, W, R, p, state0) or trial
 
     def settle_steps(self, tolerance: float) -> None:
-        """The posture's settle tolerance [rad] of the steps to come: ``settings.posture_tolerance`` while a
-        solve()'s :class:`gsik.stall.PostureSettle` runs, 0 after. While on, a worse full step that would settle the
-        posture (:meth:`_settles`) is refused at once (retries would move the pose by about the tolerance at most, for
-        up to 13 linearisations), a posture move that broke a met level gets :data:`SETTLE_RESTORING_STEPS` restoring
-        steps, and the prior's share of a step is not bounded (``PostureRows.share``; PostureSettle's gain rules)."""
+        """The posture's settle tolerance [rad] of the steps to come: ``settings.posture_tolerance`` while a solve()'s
+        :class:`gsik.stall.PostureSettle` runs, 0 after. While on, a worse full step that would settle the posture
+        (:meth:`_settles`) is refused at once (retries would move it by about the tolerance, for up to 13 steps), a
+        posture move that broke a met level gets :data:`SETTLE_RESTORING_STEPS` restoring steps, and the prior's share
+        of a step is not bounded (``PostureRows.share``; PostureSettle's gain rules)."""
         on, rows = tolerance > 0.0 and self.settle_refusals, self._posture_rows
         self._cache.settle[0] = tolerance if on else 0.0
         self._restoring = SETTLE_RESTORING_STEPS if on else RESTORING_STEPS

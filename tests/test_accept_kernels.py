@@ -11,6 +11,7 @@ import gsik
 import gsik.control
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
 from gsik.kernels import accept as ak
+from gsik.kernels.control import O_SHARE, make_work, posture_rows
 from gsik.prior import bundled_prior, use_prior
 from gsik.stall import STALL_WINDOW, StallDetector, unmet_levels
 
@@ -145,3 +146,26 @@ def test_the_compiled_step_is_the_python_branches_bit_for_bit(solve, monkeypatch
         assert (a.status, a.iterations, a.residual, a.step_norm) == (b.status, b.iterations, b.residual, b.step_norm)
     assert ends[(True, False)] > 0
     assert ends[(True, True)] > 0
+
+
+def test_a_full_step_whose_posture_share_was_bounded_never_creeps_and_starts_the_window_again():
+    """A creeping run, then one more step: a full step with its posture share scaled onto the bound (the posture
+    closing in at the bound's pace) is no creep and empties the window; a halved or targets-alone step (not whole),
+    or one whose share was within the bound, is the plain window's."""
+    n, tolerance_norms, met = 4, np.array([1e-4, 0.0]), np.array([False, False])
+    posture = posture_rows(np.zeros(n), np.eye(n) + 0.1 * np.ones((n, n)))  # a full factor: bounded
+    wk = make_work(1, n, 1, n, 1, 2)
+    assert posture.share[0] > 0.0
+
+    def creeping_window():
+        window = ak.make_window(tolerance_norms)
+        for k in range(STALL_WINDOW):
+            assert not ak.creeps(window, met, True, np.array([(3e-4 - 1e-7 * k) ** 2, 1.0]))
+        return window
+
+    costs = np.array([(3e-4 - 1e-7 * STALL_WINDOW) ** 2, 1.0])
+    for whole, share, creeps in ((True, 2.0, False), (False, 2.0, True), (True, 0.5, True)):
+        wk.out[O_SHARE] = share * posture.share[0]
+        window = creeping_window()
+        assert ak.creeps_after(whole, posture, wk, window, met, costs) == creeps
+        assert (window.ring[0] == 0) == (not creeps)

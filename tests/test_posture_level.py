@@ -25,7 +25,7 @@ def _steps(levels, lo, hi, dampings, normal):
     dampings = np.array(dampings, dtype=float)
     out = []
     for step in (lambda dq: prioritized_step_posture(*packed, dampings, lo, hi, RANK_TOLERANCE, BOX_TOLERANCE,
-                                                     BOX_RELATIVE_TOLERANCE, normal, dq),
+                                                     BOX_RELATIVE_TOLERANCE, normal, 0.0, dq, dq)[0],
                  lambda dq: priority_kernel.prioritized_step(*packed, dampings, lo, hi, RANK_TOLERANCE, BOX_TOLERANCE,
                                                              BOX_RELATIVE_TOLERANCE, dq)):
         dq = np.full(lo.shape[0], np.nan)

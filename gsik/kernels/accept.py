@@ -26,8 +26,8 @@ from gsik._jit import njit
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState
 from gsik.control_inputs import ControlStats
 from gsik.kernels import priority
-from gsik.kernels.control import O_CONVERGED, O_LAGGING, O_STATUS, O_TARGET_COST, box, level_state, linearise, \
-    step_trial, trial
+from gsik.kernels.control import O_CONVERGED, O_LAGGING, O_SHARE, O_STATUS, O_TARGET_COST, box, level_state, \
+    linearise, step_trial, trial
 from gsik.kernels.step import copy_into, copy_rows, take_frames
 from gsik.stall import STALL_PROGRESS, STALL_SHRINK, STALL_WINDOW
 
@@ -311,16 +311,16 @@ def control_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
             return
     out[R_VERDICT], out[R_DECIDED] = verdict, decided
     if verdict == V_BETTER:
-        commit(q, R, p, W, lam, damping * fall, base * floor, anchors0, decided, posture, stall_tolerance, cache,
-               window, wk)
+        commit(q, R, p, W, lam, damping * fall, base * floor, anchors0, decided, posture, stall_tolerance, True,
+               cache, window, wk)
 
 
 @njit(cache=True, _nrt=False)
-def commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tolerance, cache, window, wk):
+def commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tolerance, whole, cache, window, wk):
     """Commit the trial in ``wk``: ``q``, ``R``, ``p`` moved to it (``cache.moved`` the change), anchored from
     ``anchors0`` at level ``decided`` into ``cache``, ``lam[0]`` set to ``max(lowered, low)`` (Python's order), and
-    unless the change's norm is at most ``stall_tolerance`` [rad] the stall ``window`` asked (:func:`creeps`;
-    ``cache.out``'s ``R_COMMITTED`` and ``R_CREEPS``)."""
+    unless the change's norm is at most ``stall_tolerance`` [rad] the stall ``window`` asked (:func:`creeps_after`,
+    ``whole``: the trial is the full step's, restored or not; ``cache.out``'s ``R_COMMITTED`` and ``R_CREEPS``)."""
     out = cache.out
     anchor_into(anchors0, wk.costs, decided, cache.anchors)  # in place when anchors0 is cache.anchors
     for d in range(q.shape[0]):
@@ -340,10 +340,30 @@ def commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tole
     out[R_COMMITTED] = 1.0
     out[R_CREEPS] = -1.0
     moved = norm(cache.moved)
-    if moved > stall_tolerance * (1.0 + NORM_ROUNDING):  # above it in any summation order: the window decides
-        out[R_CREEPS] = 1.0 if creeps(window, cache.met, posture.factor.shape[0] > 0, cache.costs) else 0.0
-    elif moved < stall_tolerance * (1.0 - NORM_ROUNDING):
+    if moved < stall_tolerance * (1.0 - NORM_ROUNDING):
         out[R_CREEPS] = 0.0  # held by its norm alone: the window is not asked
+    elif moved > stall_tolerance * (1.0 + NORM_ROUNDING) or (whole and share_bounded(posture, wk)):
+        # above it in any summation order (or a bounded posture move, never a creep): the window decides
+        out[R_CREEPS] = 1.0 if creeps_after(whole, posture, wk, window, cache.met, cache.costs) else 0.0
+
+
+@njit(cache=True, _nrt=False)
+def creeps_after(whole, posture, wk, window, met, costs):
+    """:func:`creeps` after a step, the posture on when ``posture`` has rows. A full step taken (``whole``: not
+    halved, nor the target levels' alone) whose posture share was bounded (:func:`share_bounded`) is the posture
+    closing in, never a creep: the window starts again after it."""
+    if whole and share_bounded(posture, wk):
+        reset(window)
+        return False
+    return creeps(window, met, posture.factor.shape[0] > 0, costs)
+
+
+@njit(cache=True, _nrt=False)
+def share_bounded(posture, wk):
+    """True if the last full step's posture share was scaled onto its bound (``wk.out[O_SHARE]`` above
+    ``posture.share[0]``; :func:`gsik.kernels.posture_level.prioritized_step_posture`): the posture has further to go
+    than one step takes, so the step has not settled."""
+    return wk.out[O_SHARE] > posture.share[0]
 
 
 @njit(cache=True, _nrt=False)

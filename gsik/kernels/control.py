@@ -33,12 +33,11 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
-from gsik.kernels.posture_level import normal_matrix
-from gsik.kernels.posture_share import POSTURE_SHARE, bounded_step
+from gsik.kernels.posture_level import POSTURE_SHARE, normal_matrix, prioritized_step_posture
 
 # Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
 # convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0); the full
-# step's posture share's largest component before its bound [rad] (0: not bounded, :mod:`gsik.kernels.posture_share`).
+# step's posture share's largest component before its bound [rad] (0: not bounded, :mod:`gsik.kernels.posture_level`).
 O_STATUS, O_CONVERGED, O_TARGET_COST, O_LAGGING, O_SHARE = range(5)
 
 
@@ -82,7 +81,7 @@ class PostureRows(NamedTuple):
             well-conditioned factor: :func:`gsik.kernels.posture_level.normal_matrix`), else empty (default:
             the pivoted QR's level).
         share: (1,) the bound [rad] on the posture level's share of a step where ``normal`` is given
-            (:func:`gsik.kernels.posture_share.bounded_step`; 0: none).
+            (:func:`gsik.kernels.posture_level.prioritized_step_posture`; 0: none).
     """
 
     reference: np.ndarray
@@ -95,7 +94,7 @@ class PostureRows(NamedTuple):
 def posture_rows(reference: np.ndarray | None, factor: np.ndarray) -> PostureRows:
     """The :class:`PostureRows` of a posture at ``reference`` (n,) [rad] with the factor ``factor`` (k, n) of its
     precision (``None`` and (0, n): no posture); gain 1; a full factor's (the learned prior's, solved by its normal
-    equations) share of a step bounded by :data:`gsik.kernels.posture_share.POSTURE_SHARE`, a diagonal one's not
+    equations) share of a step bounded by :data:`gsik.kernels.posture_level.POSTURE_SHARE`, a diagonal one's not
     (the retargeter's and the bundled priors' results stay bit for bit)."""
     n = factor.shape[1]
     if reference is None:
@@ -270,17 +269,18 @@ def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, 
     """One prioritised step from ``q`` (n,) [rad] (frames ``R``, ``p``, error rows ``e``, level ``costs`` there) and
     its trial, into ``wk``: the levels linearised and packed (:func:`linearise`), each one's damping
     (:func:`dampings_into`, the adaptive ``lam`` and the ``base`` damping, ``near`` (L,)), the box (:func:`box`),
-    the step ``wk.dq`` (:func:`gsik.kernels.posture_share.bounded_step`, a full posture's level by its normal
-    equations, its share bounded by ``posture.share``; ``tols``: its rank, box and relative box tolerances, a tuple)
-    and the trial at ``q + dq`` (:func:`trial`). ``wk.out[O_STATUS]``: the step kernel's status (no trial when not
-    OK), ``wk.out[O_SHARE]`` the posture share's largest component before its bound."""
+    the step ``wk.dq`` (:func:`gsik.kernels.posture_level.prioritized_step_posture`, a full posture's level by its
+    normal equations, its share bounded by ``posture.share``; ``tols``: its rank, box and relative box tolerances,
+    a tuple) and the trial at ``q + dq`` (:func:`trial`). ``wk.out[O_STATUS]``: the step kernel's status (no trial
+    when not OK), ``wk.out[O_SHARE]`` the posture share's largest component before its bound."""
     linearise(task_model, tasks, posture, q, R, p, e, wk)
     posture_on = posture.factor.shape[0] > 0
     dampings_into(costs, near, lam, base, posture_on, wk.dampings)
     box(q, q, lower, upper, max_step, wk.lo, wk.hi)
     rank_tol, box_tol, box_rel_tol = tols
-    status, share = bounded_step(wk.rows, wk.errors, wk.weights, tasks.starts, wk.dampings, wk.lo, wk.hi, rank_tol,
-                                 box_tol, box_rel_tol, posture.normal, posture.share[0], wk.dq, wk.below)
+    status, share = prioritized_step_posture(wk.rows, wk.errors, wk.weights, tasks.starts, wk.dampings, wk.lo,
+                                             wk.hi, rank_tol, box_tol, box_rel_tol, posture.normal, posture.share[0],
+                                             wk.dq, wk.below)
     wk.out[O_STATUS] = status
     wk.out[O_SHARE] = share
     if status == priority.OK:

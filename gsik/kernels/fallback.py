@@ -109,7 +109,7 @@ def refused(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, 
     out[R_VERDICT], out[R_DECIDED] = verdict, decided
     if verdict == V_BETTER:
         lowered, low = (damping * fall, base * floor) if tries == 0 else (damping, -math.inf)
-        commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tolerance, cache, window, wk)
+        commit(q, R, p, W, lam, lowered, low, anchors0, decided, posture, stall_tolerance, False, cache, window, wk)
         return
     _refuse(verdict, lam, damping, posture, c0, met0, cache, window)
 

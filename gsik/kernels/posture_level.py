@@ -21,6 +21,17 @@ largest row norm (at most ``sigma_max(L)``). Both are then the same step up to r
   same reflection in ``O(rz n)`` and ``O(rz^2)`` and the level re-solved by an ``rz x rz`` Cholesky factorisation, not
   factored from scratch.
 
+The posture's share of the step (the step minus the target levels' own) is bounded on its own where ``bound`` > 0:
+a trust region for the learned prior's move. That move is flat for the target levels only to first order: a long
+one breaks a met target level by its second order, the trial is refused at that level and a restoring step (a
+second prioritised solve at the trial pose, :func:`gsik.kernels.accept.restore`) brings it back. With the bundled
+prior on bench_drag's studio drag the posture's move reached the whole step bound (``max_step``, 0.25 rad) in 174 of
+300 frames, where the moves of the trials accepted at once were ~0.07 rad. The share ``s`` lies in the target
+levels' free basis, so scaling it (:func:`_bound_share`) leaves their linearised errors alone, and the step stays in
+the (convex) box between two steps inside it; a share within the bound leaves the step bit for bit the unbounded one.
+A step whose share was bounded has not settled (the posture has further to go than one step takes): the stall
+window does not count it as creeping (:func:`gsik.kernels.accept.commit`), nor ``Solver.step()`` as converged.
+
 The level's kernels allocate nothing and are compiled without numba's reference counting (``_nrt=False``, as in
 :mod:`gsik.kernels.kinematics`); :func:`prioritized_step_posture` allocates the step's buffers and says ``_nrt=True``
 (see :mod:`gsik.kernels.priority`).
@@ -34,6 +45,7 @@ from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.pgs import _cholesky_solve
 from gsik.kernels.rows import axpy1, dot, dot1
+from gsik.kernels.step import copy_into
 
 #: A posture factor is solved by its normal equations when its precision ``P = L^T L`` minus this fraction of its
 #: trace is still positive definite: its condition number is then below ``n / 1e-8`` and ``sigma_min(L)`` above
@@ -41,6 +53,11 @@ from gsik.kernels.rows import axpy1, dot, dot1
 #: ``1e-4 / sqrt(n)`` of that row norm, five orders above :data:`gsik.priority.RANK_TOLERANCE`, and the normal
 #: equations lose no more than ~1e-8 of the step to rounding.
 WELL_CONDITIONED = 1e-8
+#: The bound [rad] on the posture's share of a step with a full posture factor (the learned prior:
+#: :attr:`gsik.kernels.control.PostureRows.share`; never a diagonal one's, nor in a solve()'s settling steps); 0:
+#: none. On bench_drag's studio drag (one step a frame) it took restoring steps 174 -> 0 and the step 3.0x -> 1.9x a
+#: plain one (README, issue 20).
+POSTURE_SHARE = 0.07
 
 
 def normal_matrix(factor: np.ndarray) -> np.ndarray:
@@ -64,27 +81,55 @@ def normal_matrix(factor: np.ndarray) -> np.ndarray:
 
 @njit(cache=True, _nrt=True)
 def prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, normal,
-                             dq):
+                             bound, dq, below):
     """:func:`gsik.kernels.priority.prioritized_step` whose last level is a posture with the normal matrix
-    ``normal`` (n, n) (:func:`normal_matrix` of its rows, weights 1), solved by its normal equations; ``normal`` (0,
-    n): the pivoted QR's level, bit for bit :func:`~gsik.kernels.priority.prioritized_step`. Same arguments, status
-    and ``dq`` (n,) [rad] (to rounding)."""
+    ``normal`` (n, n) (:func:`normal_matrix` of its rows, weights 1), solved by its normal equations, its share of the
+    step bounded by ``bound`` [rad] (> 0; else not bounded: :func:`_bound_share`); ``normal`` (0, n): the pivoted
+    QR's level, bit for bit :func:`~gsik.kernels.priority.prioritized_step`, never bounded. Same arguments before
+    ``bound``, same ``dq`` (n,) [rad] (to rounding); ``below`` (n,): scratch, the target levels' own step where the
+    share is bounded. Returns ``(status, largest component of the share before bounding [rad], 0 when not
+    bounded)``."""
     posture = dampings.shape[0] - 1
     if normal.shape[0] == 0 or posture < 0 or starts[posture + 1] - starts[posture] != normal.shape[0]:
         return priority.prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
-                                         box_rel_tol, dq)
+                                         box_rel_tol, dq), 0.0
     wk, last = priority.begin(starts, dampings, lo, dq)
     status, z0, rz, identity = priority.solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol,
                                                      box_tol, box_rel_tol, posture, last, dq)
     if status != priority.OK:
-        return status
+        return status, 0.0
+    bounded = bound > 0.0
+    if bounded:
+        copy_into(below, dq)
     if rz > 0:
         if identity:
             priority._identity_into(wk.Zt, lo.shape[0])
         _posture_level(wk, rows, errors, starts[posture], starts[posture + 1], normal, z0, rz, dq, lo, hi,
                        dampings[posture], box_tol, box_rel_tol)
     priority.clip(dq, lo, hi)
-    return priority.OK
+    if not bounded:
+        return priority.OK, 0.0
+    return priority.OK, _bound_share(dq, below, lo, hi, bound)
+
+
+@njit(cache=True, _nrt=False)
+def _bound_share(dq, below, lo, hi, bound):
+    """The posture's share ``s = dq - below`` (the step minus the target levels' step ``below``, both (n,) [rad])
+    scaled in place to at most ``bound`` [rad] in its largest component: ``dq = below + t s``,
+    ``t = min(1, bound / max|s|)``, clipped into ``lo <= dq <= hi`` (rounding only: both ends are in the box).
+    Returns ``max|s|`` before scaling [rad]."""
+    n = dq.shape[0]
+    largest = 0.0
+    for d in range(n):
+        a = abs(dq[d] - below[d])
+        if a > largest:
+            largest = a
+    if largest > bound:
+        t = bound / largest
+        for d in range(n):
+            dq[d] = below[d] + t * (dq[d] - below[d])
+        priority.clip(dq, lo, hi)
+    return largest
 
 
 @njit(cache=True, _nrt=False)
