@@ -175,7 +175,7 @@ def test_tracking_steps_keep_a_dragged_hand_within_1_mm_where_one_linearisation_
 
 
 def test_the_prior_s_bounded_share_keeps_the_hands_in_one_linearisation_without_restoring(biped, monkeypatch):
-    """The same frame with the prior's share of the step bounded (0.07 rad; off by default): one linearisation keeps
+    """The same frame with the prior's share of the step bounded (0.07 rad, the default): one linearisation keeps
     both hands within 1 mm and the pins within 0.1 mm, and its full step is accepted without a restoring step."""
     monkeypatch.setattr(ck, "POSTURE_SHARE", 0.07)
     one, solver = _drag_frame1(biped, 1)
