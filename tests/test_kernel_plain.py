@@ -16,7 +16,7 @@ from hypothesis.extra import numpy as hnp
 
 import gsik
 from gsik import Target, kernels
-from gsik._jit import njit
+from gsik._jit import njit, python_function
 from gsik.io.urdf_skeleton import skeleton_from_urdf
 from gsik.kernels import O_RESIDUAL, buffers, pgs, plain
 from gsik.kernels import step as step_kernels
@@ -238,3 +238,32 @@ def test_the_uncounted_kernels_neither_keep_nor_drop_a_reference(arm, biped, whi
         held.append((sys.getrefcount(floats), sys.getrefcount(ints)))
     assert held[1] == held[0]
     assert np.isfinite(solver.q).all()
+
+
+@pytest.mark.parametrize("x, inside", [
+    (np.zeros(3), False),  # no last step to go by: an idle frame, a new pose
+    (np.array([0.1, 0.0, -0.1]), True),
+    (np.array([0.2, 0.0, -0.1]), False),  # at a bound: the last step touched it
+])
+def test_the_whole_body_guesses_an_early_stop_from_a_moving_warm_start_inside_the_box(x, inside):
+    lo, hi = np.full(3, -0.2), np.full(3, 0.2)
+    assert bool(python_function(step_kernels._guess)(x, lo, hi)) is inside
+
+
+def test_a_drag_step_stopped_early_on_the_biped_is_the_step_from_rest_with_every_sweep(biped):
+    """Along a smooth drag the biped's steps stop their sweeps early (the warm start lies inside the box) and take
+    the whole system's answer: the box's minimiser a step without a warm start reaches with all its sweeps."""
+    from gsik.benchmark import _targets, smooth_trajectory
+
+    settings = dict(adaptive_damping=False, sweeps=5)
+    Q = smooth_trajectory(biped, 40, seed=3)
+    solver = gsik.Solver(biped, q0=Q[0], **settings)
+    W = solver.world_from_root
+    early = 0
+    for q in Q[1:]:
+        targets = _targets(biped, q, W)
+        cold = gsik.Solver(biped, q0=solver.q, world_from_root=W, **settings)  # x = 0: no guess, every sweep
+        a, b = solver.step(targets), cold.step(targets)
+        early += a.sweeps < b.sweeps
+        np.testing.assert_allclose(a.q, b.q, rtol=0.0, atol=1e-12)
+    assert early >= 30

@@ -127,7 +127,7 @@ def _cholesky_solve(M, r, nf):
 
 
 @njit(cache=True, inline="always")
-def _strictly_inside(x, lo, hi):
+def strictly_inside(x, lo, hi):
     """True if every ``x[i]`` lies strictly between ``lo[i]`` and ``hi[i]``."""
     for i in range(x.shape[0]):
         if not (lo[i] < x[i] and x[i] < hi[i]):
@@ -217,7 +217,7 @@ def bounded_solve_in(A, b, x, lo, hi, sweeps, stats, free, is_free, M, r, until_
         for _ in range(sweeps):
             projected_gauss_seidel(A, b, x, lo, hi, 1, 0.0, 0.0, x, 0.0, stats)
             total += 1
-            if _strictly_inside(x, lo, hi):
+            if strictly_inside(x, lo, hi):
                 return _whole_inside(A, b, x, lo, hi, stats, total, free, is_free, M, r)
     else:
         projected_gauss_seidel(A, b, x, lo, hi, sweeps, 0.0, 0.0, x, 0.0, stats)

@@ -18,7 +18,7 @@ from gsik._jit import njit
 from gsik.kernels import (BUDGET_EXHAUSTED, CONVERGED, O_COST, O_FINITE, O_ITERATIONS, O_RESIDUAL, O_STATUS,
                           O_STEP_NORM, O_SWEEPS, STALLED, make_scratch)
 from gsik.kernels.kinematics import effector_errors, frames_into, linear_system
-from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
+from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel, strictly_inside
 
 # With adaptive damping, lam may fall to this fraction of delta while steps succeed: near a
 # solution the steps come closer to Gauss-Newton and the last millimetre takes tens of frames, not hundreds
@@ -26,7 +26,9 @@ from gsik.kernels.pgs import bounded_solve_in, projected_gauss_seidel
 ADAPTIVE_FLOOR = 0.1
 #: Up to this many DOFs (a limb), a frame step's bounded solve stops its first sweeps early when no bound is touched
 #: (:func:`gsik.kernels.pgs.bounded_solve_in`'s ``until_inside``): a wrong guess costs a few sweeps and a small
-#: Cholesky again. On a whole body (the 30-DOF biped, Table 1 with the defaults) one costs ~8 µs: not used there.
+#: Cholesky again. On a whole body (the 30-DOF biped) a wrong guess costs ~8 µs (Table 1 with the defaults: steps
+#: from rest), so there it is tried only when the warm start is the last step's and lies strictly inside the bounds
+#: (:func:`_guess`): a drag's steps, where the guess holds.
 EARLY_STOP_DOFS = 8
 
 
@@ -157,6 +159,16 @@ def _start(x, x_prev, lo, hi, warm_start):
 
 
 @njit(cache=True, inline="always")
+def _guess(x, lo, hi):
+    """True if the warm start ``x`` (n,) moves (a step after a step, not after an idle frame or a new pose) and lies
+    strictly inside the bounds ``lo``, ``hi``: the last step touched none, so this one likely touches none either."""
+    moves = False
+    for i in range(x.shape[0]):
+        moves = moves or x[i] != 0.0
+    return moves and strictly_inside(x, lo, hi)
+
+
+@njit(cache=True, inline="always")
 def _step_solve(model, settings, q, lam, ws, sc):
     """Solve ``(A + lam I) x = b`` within the limits and the step bound, warm-started from ``ws.x``."""
     n = q.shape[0]
@@ -167,8 +179,9 @@ def _step_solve(model, settings, q, lam, ws, sc):
     copy_into(sc.x_prev, x)
     _start(x, sc.x_prev, lo, hi, settings.warm_start)
     if settings.subspace_minimization:
+        guess = n <= EARLY_STOP_DOFS or (settings.warm_start and _guess(x, lo, hi))
         if not bounded_solve_in(A, sc.b, x, lo, hi, settings.sweeps, ws.stats, sc.free_index, sc.free_mask,
-                                sc.free_M, sc.free_r, n <= EARLY_STOP_DOFS):
+                                sc.free_M, sc.free_r, guess):
             # A bound is active: from the same start with all the sweeps (the step's numbers as they always were).
             early = ws.stats[O_SWEEPS]
             _start(x, sc.x_prev, lo, hi, settings.warm_start)
