@@ -30,8 +30,8 @@ import numpy as np
 
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
 from gsik.balance import center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, support_polygon
-from gsik.control_inputs import GROUND_TOLERANCE, Balance, ControlStats, FrameTask, Posture, frame_tasks, \
-    structure, support  # noqa: F401  (gsik.control's names, as before the split)
+from gsik.control_inputs import (CONSTRAINT_TRACKING_ERROR, GROUND_TOLERANCE, TRACKING_ERROR, Balance,  # noqa: F401
+                                 ControlStats, FrameTask, Posture, frame_tasks, lag_factors, structure, support)
 from gsik.control_inputs import _ordered, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
 from gsik.control_targets import ControlReport, ControlTargets, _same  # noqa: F401  (ControlReport re-exported)
 from gsik.kernels import compiled_entry
@@ -48,12 +48,6 @@ from gsik.rotations import transform
 
 _new_tuple = tuple.__new__  # a NamedTuple with every field given, without its __new__'s Python call
 
-#: A target lags while it is off by more than this many times its tolerance (1 mm, 0.01 rad at the defaults): with
-#: ``settings.tracking_steps`` above 1 a ``Solver.step()`` then linearises again. Measured on bench_drag's studio
-#: default (pins and the bundled prior, hands dragged 6 mm a frame round a circle): one linearisation a frame kept
-#: both hands within 1 mm in 243 of 300 frames (the posture's move, flat only to first order, leaves them up to
-#: 7 mm off), up to three in 300 (a third of the frames take two).
-TRACKING_ERROR = 10.0
 #: Newton steps of the target levels that may bring a posture move back onto them.
 RESTORING_STEPS = 3
 #: ... in a solve()'s attempt that settles its posture (:meth:`Controller.settle_steps`). On bench_drag's warm solve()
@@ -174,9 +168,9 @@ class Controller(ControlTargets):
         starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         self._tasks_in = ck.ControlTasks(self._topo.effector_frame.astype(np.int64), self._tp, self._tR,
                                          np.ascontiguousarray(w), self._task_level,
-                                         0.5 * self._tolerance, self._tolerance, TRACKING_ERROR * self._tolerance,
-                                         packed_row,
-                                         packed_weight, starts)
+                                         0.5 * self._tolerance, self._tolerance,
+                                         lag_factors(self._task_level) * self._tolerance, packed_row, packed_weight,
+                                         starts)
         self._work = ck.make_work(self._sk.n_frames, self._sk.n_dofs, len(self._tasks), int(starts[-1]), L,
                                   len(counts))
         self._entries = {}  # compiled entry points, made at first use for these inputs
@@ -191,6 +185,7 @@ class Controller(ControlTargets):
         self._window = ak.make_window(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
         self._cache = ak.make_cache(self._sk.n_dofs, len(self._tasks), L)  # the last accepted pose's levels
         self._step_calls = {}  # restoring steps: (compiled entry, StepInputs), made at the first such compiled step
+
 
     def _call(self, kernel, *args):
         """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""

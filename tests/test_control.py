@@ -298,3 +298,27 @@ def test_a_warm_solve_with_a_posture_keeps_its_converged_first_attempt(biped):
         assert r.errors()["left_hand"][0] < 1e-4 and max(r.errors()[n][0] for n in targets) < 1e-4
     cold = solver.solve(q0=biped.rest)
     assert cold.converged and cold.attempts == 2
+
+
+def test_a_dragged_pin_above_dragged_hands_ends_each_step_within_its_tolerance_or_out_of_steps(biped):
+    """The first level's targets are constraints when a lower level holds targets: a step with steps left takes
+    another while a pin is off by more than its tolerance (the hands below lag only beyond ten times theirs)."""
+    from gsik.prior import bundled_prior, use_prior
+
+    solver = Solver(biped, tracking_steps=3)
+    poses = solver.effector_poses()
+    use_prior(solver, bundled_prior("biped"))
+
+    def targets(frame):
+        foot = poses["left_foot"].copy()
+        foot[1:3, 3] += [0.002 * frame, 0.001 * frame]  # forward and up, 2.2 mm a frame
+        t = {"pelvis": Target.from_transform(poses["pelvis"]), "left_foot": Target.from_transform(foot)}
+        t.update({h: Target(poses[h][:3, 3], position_only=True, priority=1) for h in ("left_hand", "right_hand")})
+        return t
+
+    solver.solve(targets(0))
+    tolerance = solver.settings.position_tolerance
+    for frame in range(1, 21):
+        r = solver.step(targets(frame))
+        pin = r.position_errors[r.effector_names.index("left_foot")]
+        assert pin <= tolerance or r.iterations == 3 or r.status == gsik.Status.STALLED, (frame, pin)
