@@ -146,17 +146,18 @@ class AttemptPolicy:
         self._work_done = [0, 0]
         if first is None:
             start = self._q.copy()
-            self._warm_attempt = self._warm_start(start)
+            warm = self._warm_attempt = self._warm_start(start)
             try:
                 stats = self._solve_from(start)
             finally:
                 self._warm_attempt = False
         else:
             start, stats = first[0], self._count(first[1])
+            warm = False  # a single-level first attempt: no posture, none from it to compare with
         attempts = 1
         if _status(stats) is not Status.CONVERGED and restarts:
             stats, attempts = self._restart(start, stats)
-        elif restarts and self._posture is not None and not self._warm_start(start) \
+        elif restarts and self._posture is not None and not warm \
                 and self._attempt_rank(stats)[-1] > 0.0 and not self._starts_at_posture(start):
             stats, attempts = self._posture_attempt(stats)
         stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
@@ -309,7 +310,7 @@ class AttemptPolicy:
     def _reaches_first(self) -> bool:
         """True if a prioritised attempt may meet its targets on the single-level path first: a posture is the
         only thing that makes it prioritised (one level of targets, all on effectors, no balance)."""
-        return self._posture is not None and not self._balance and not self._controlled_targets()
+        return self._posture is not None and not self._balance and not self._layout_controlled  # packed with them
 
     def _reach_then_settle(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """An attempt with a posture below one level of targets: meet the targets on the single-level path
@@ -320,6 +321,11 @@ class AttemptPolicy:
         Statistics of both phases' work summed."""
         reach = self._kernel_solve(q0, iterations)
         if _status(reach) is Status.CONVERGED:
+            learnt = self._posture_gain
+            if self._warm_attempt and learnt[1] == q0.tobytes():
+                # A warm solve's reach moved the pose the last settle ended at by one frame's targets: the share
+                # and contraction it learnt there are this pose's as well (a warm settle, not a cold one).
+                self._posture_gain = (learnt[0], self._q.tobytes(), learnt[2], learnt[3])
             stats = self._control_solve(self._q.copy(), iterations)
         else:
             stats = self._control_solve(q0, iterations)
@@ -352,7 +358,8 @@ class AttemptPolicy:
     def _control_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """One attempt of prioritised steps from ``q0`` until the pose holds; statistics as the kernel's solve."""
         c = self._make_controller()
-        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
+        if q0.tobytes() != self._q.tobytes():  # the current angles are within the limits: clipped as they are
+            self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
         self._refresh_frames()
         first, converged = self._control_positions_first(c, iterations)
         st, it = self._control_steps(c, iterations - first, converged)

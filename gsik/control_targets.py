@@ -43,6 +43,9 @@ _new_tuple = tuple.__new__  # a NamedTuple with every field given, without its _
 class ControlTargets:
     """Retargeting and error reports, for :class:`gsik.control.Controller`."""
 
+    #: ``(the ControlTasks it was made for, (2, m) True where a task does not use its position / orientation row)``
+    _unused: tuple = (None, None)
+
     def retarget(self, tasks) -> None:
         """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
         ordered = _ordered(tasks)
@@ -107,9 +110,11 @@ class ControlTargets:
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Position [m] and orientation [rad] error (m,) of each task (0 where a row is unused)."""
         self._task_errors(R, p)
-        err = self._err.copy()
-        err[0, self._row_w[:, 0] <= 0.0] = 0.0
-        err[1, self._row_w[:, 3] <= 0.0] = 0.0
+        made_for, unused = self._unused
+        if made_for is not self._tasks_in:  # (2, m) the rows no target uses, for these row weights
+            unused = np.stack([self._row_w[:, 0] <= 0.0, self._row_w[:, 3] <= 0.0])
+            self._unused = (self._tasks_in, unused)
+        err = np.where(unused, 0.0, self._err)  # one call: cheaper than two masked assignments
         return err[0], err[1]
 
     def report(self, effector_names: tuple[str, ...], q, R, p, left: bool = False) -> ControlReport:
