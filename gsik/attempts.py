@@ -381,7 +381,7 @@ class AttemptPolicy:
         are the ones :meth:`~gsik.control.Controller.converged` reads, so the posture's settle test reuses them."""
         if not (self._stages_positions() and iterations):
             return 0, None
-        pos, ori = (e.tolist() for e in c.errors(self._ws.R, self._ws.p))  # a few tasks: plain floats are cheaper
+        pos, ori = c.error_lists(self._ws.R, self._ws.p)  # a few tasks: plain floats are cheaper
         if all(e <= solve_kernels.STAGE_ANGLE for e in ori):  # as ori.max() <= STAGE_ANGLE, a NaN included
             return 0, c.within_tolerances(pos, ori)  # Controller.converged's test, on these errors
         tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)
@@ -401,13 +401,14 @@ class AttemptPolicy:
         it = 0
         if posture is not None:
             c.settle_steps(self._settings.posture_tolerance)  # a worse step that settles it is not retried
+        q, W, R, p, step = self._q, self._W, self._ws.R, self._ws.p, c.step  # read once, not per step
         try:
             for it in range(1, iterations + 1):
-                before = self._q.copy() if posture is not None else None
-                st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
+                before = q.copy() if posture is not None else None
+                st = step(q, W, R, p, lam)
                 if st.held or (st.converged and not settles):
                     break
-                if posture is not None and posture.settled(c.first_step(), self._q - before, st.converged):
+                if posture is not None and posture.settled(c.first_step(), q - before, st.converged):
                     st = st._replace(held=True)
                     break
         finally:
