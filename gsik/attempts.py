@@ -321,11 +321,6 @@ class AttemptPolicy:
         Statistics of both phases' work summed."""
         reach = self._kernel_solve(q0, iterations)
         if _status(reach) is Status.CONVERGED:
-            learnt = self._posture_gain
-            if self._warm_attempt and learnt[1] == q0.tobytes():
-                # A warm solve's reach moved the pose the last settle ended at by one frame's targets: the share
-                # and contraction it learnt there are this pose's as well (a warm settle, not a cold one).
-                self._posture_gain = (learnt[0], self._q.tobytes(), learnt[2], learnt[3])
             stats = self._control_solve(self._q.copy(), iterations)
         else:
             stats = self._control_solve(q0, iterations)

@@ -152,28 +152,6 @@ def test_warm_solves_skip_the_verifying_step_with_the_targets_met_and_the_postur
         np.testing.assert_allclose(a.q, b.q, atol=0.005)  # [rad]
 
 
-def test_warm_solves_with_the_hands_at_0_settle_warm_after_their_reach(biped, monkeypatch):
-    """A posture below one level of targets: each attempt reaches on the single level, then settles. In a warm solve
-    the reach moves the pose the last settle ended at by one frame's targets; the settle after it is a warm one
-    (its contraction carried), with the targets met and the posture kept as with the test off."""
-    contractions = []
-
-    def recording(tolerance, converged, gain, contraction=None):
-        contractions.append(contraction)
-        return PostureSettle(tolerance, converged, gain, contraction)
-
-    off, _ = _drag(biped, 8, posture_tolerance=0.0)
-    monkeypatch.setattr(gsik.attempts, "PostureSettle", recording)
-    warm, posture = _drag(biped, 8)
-    assert all(r.status is gsik.Status.CONVERGED for r in warm + off)
-    assert all(r.attempts == 1 for r in warm)
-    # The first solve with the posture is cold (it was set after the last solve); every later one settles warm.
-    assert contractions[0] is None and len(contractions) == 8
-    assert all(c is not None for c in contractions[1:])
-    for a, b in zip(warm, off):
-        assert _posture_cost(posture, a.q) <= 1.01 * _posture_cost(posture, b.q)
-
-
 def test_a_step_ignores_the_posture_tolerance(biped):
     def steps(**settings):
         solver = gsik.Solver(biped, **settings)
