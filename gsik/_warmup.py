@@ -34,6 +34,7 @@ def compile_kernels() -> float:
     solver.step({n: gsik.Target.from_transform(T, priority=k % 2) for k, (n, T) in enumerate(poses.items())})
     solver.move_target(name, poses[name][:3, 3] + 0.01)  # a moved target gathered (kernels.gather), then stepped
     solver.step()
+    solver.solve()  # a solve's posture settle (kernels.settle)
     solver.set_balance(True)  # balance's levels are packed from Python: the step's kernels one by one
     solver.step()
     kinematics.jacobian(biped, biped.rest)

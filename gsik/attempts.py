@@ -146,17 +146,18 @@ class AttemptPolicy:
         self._work_done = [0, 0]
         if first is None:
             start = self._q.copy()
-            self._warm_attempt = self._warm_start(start)
+            warm = self._warm_attempt = self._warm_start(start)
             try:
                 stats = self._solve_from(start)
             finally:
                 self._warm_attempt = False
         else:
             start, stats = first[0], self._count(first[1])
+            warm = False  # a single-level first attempt: no posture, none from it to compare with
         attempts = 1
         if _status(stats) is not Status.CONVERGED and restarts:
             stats, attempts = self._restart(start, stats)
-        elif restarts and self._posture is not None and not self._warm_start(start) \
+        elif restarts and self._posture is not None and not warm \
                 and self._attempt_rank(stats)[-1] > 0.0 and not self._starts_at_posture(start):
             stats, attempts = self._posture_attempt(stats)
         stats[O_ITERATIONS], stats[O_SWEEPS] = self._work_done
@@ -309,7 +310,7 @@ class AttemptPolicy:
     def _reaches_first(self) -> bool:
         """True if a prioritised attempt may meet its targets on the single-level path first: a posture is the
         only thing that makes it prioritised (one level of targets, all on effectors, no balance)."""
-        return self._posture is not None and not self._balance and not self._controlled_targets()
+        return self._posture is not None and not self._balance and not self._layout_controlled  # packed with them
 
     def _reach_then_settle(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """An attempt with a posture below one level of targets: meet the targets on the single-level path
@@ -352,7 +353,8 @@ class AttemptPolicy:
     def _control_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """One attempt of prioritised steps from ``q0`` until the pose holds; statistics as the kernel's solve."""
         c = self._make_controller()
-        self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
+        if q0.tobytes() != self._q.tobytes():  # the current angles are within the limits: clipped as they are
+            self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
         self._refresh_frames()
         first, converged = self._control_positions_first(c, iterations)
         st, it = self._control_steps(c, iterations - first, converged)
@@ -374,7 +376,7 @@ class AttemptPolicy:
         are the ones :meth:`~gsik.control.Controller.converged` reads, so the posture's settle test reuses them."""
         if not (self._stages_positions() and iterations):
             return 0, None
-        pos, ori = (e.tolist() for e in c.errors(self._ws.R, self._ws.p))  # a few tasks: plain floats are cheaper
+        pos, ori = c.error_lists(self._ws.R, self._ws.p)  # a few tasks: plain floats are cheaper
         if all(e <= solve_kernels.STAGE_ANGLE for e in ori):  # as ori.max() <= STAGE_ANGLE, a NaN included
             return 0, c.within_tolerances(pos, ori)  # Controller.converged's test, on these errors
         tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)
@@ -394,13 +396,14 @@ class AttemptPolicy:
         it = 0
         if posture is not None:
             c.settle_steps(self._settings.posture_tolerance)  # a worse step that settles it is not retried
+        q, W, R, p, step = self._q, self._W, self._ws.R, self._ws.p, c.step  # read once, not per step
         try:
             for it in range(1, iterations + 1):
-                before = self._q.copy() if posture is not None else None
-                st = c.step(self._q, self._W, self._ws.R, self._ws.p, lam)
+                before = q.copy() if posture is not None else None
+                st = step(q, W, R, p, lam)
                 if st.held or (st.converged and not settles):
                     break
-                if posture is not None and posture.settled(c.first_step(), self._q - before, st.converged):
+                if posture is not None and posture.settled(c.first_step(), q - before, st.converged):
                     st = st._replace(held=True)
                     break
         finally:

@@ -43,6 +43,9 @@ _new_tuple = tuple.__new__  # a NamedTuple with every field given, without its _
 class ControlTargets:
     """Retargeting and error reports, for :class:`gsik.control.Controller`."""
 
+    #: ``(the ControlTasks it was made for, (2, m) True where a task does not use its position / orientation row)``
+    _unused: tuple = (None, None)
+
     def retarget(self, tasks) -> None:
         """New target values for the same structure (``structure(...) == self.key``): no rebuild while dragging."""
         ordered = _ordered(tasks)
@@ -106,11 +109,22 @@ class ControlTargets:
 
     def errors(self, R: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Position [m] and orientation [rad] error (m,) of each task (0 where a row is unused)."""
-        self._task_errors(R, p)
-        err = self._err.copy()
-        err[0, self._row_w[:, 0] <= 0.0] = 0.0
-        err[1, self._row_w[:, 3] <= 0.0] = 0.0
+        err = self._used_errors(R, p)
         return err[0], err[1]
+
+    def error_lists(self, R: np.ndarray, p: np.ndarray) -> tuple[list[float], list[float]]:
+        """:meth:`errors` as two lists of plain floats (what a test of a few tasks reads fastest)."""
+        pos, ori = self._used_errors(R, p).tolist()
+        return pos, ori
+
+    def _used_errors(self, R: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """(2, m) :meth:`errors`, a new array."""
+        self._task_errors(R, p)
+        made_for, unused = self._unused
+        if made_for is not self._tasks_in:  # (2, m) the rows no target uses, for these row weights
+            unused = np.stack([self._row_w[:, 0] <= 0.0, self._row_w[:, 3] <= 0.0])
+            self._unused = (self._tasks_in, unused)
+        return np.where(unused, 0.0, self._err)  # one call: cheaper than two masked assignments
 
     def report(self, effector_names: tuple[str, ...], q, R, p, left: bool = False) -> ControlReport:
         """The :class:`ControlReport` of every effector (0 without a target), then the other targeted frames, at
@@ -151,8 +165,7 @@ class ControlTargets:
 
     def converged(self, R, p) -> bool:
         """True if every target is within the position and orientation tolerances."""
-        pos, ori = self.errors(R, p)
-        return self.within_tolerances(pos.tolist(), ori.tolist())
+        return self.within_tolerances(*self.error_lists(R, p))
 
     def share_bounded(self) -> bool:
         """True if the last step's posture share was scaled onto its bound (:func:`gsik.kernels.accept.share_bounded`):

@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from gsik.kernels.settle import largest_pair
+
 #: A stall is judged over this many steps, taken or refused (a run of refusals while the damping climbs is one) ...
 STALL_WINDOW = 6
 #: ... in which no unmet level's weighted error norm fell by this fraction of that norm at its tolerances ...
@@ -140,8 +142,8 @@ class PostureSettle:
             converged: Every target is within its tolerances after the step.
         """
         within, self._converged = self._converged and converged, converged
-        full = float(np.abs(step).max())
-        whole = full > 0.0 and float(np.abs(moved).max()) >= 0.5 * full  # not halved twice, nor refused
+        full, most = largest_pair(step, moved)  # each float(np.abs(x).max()), in one compiled call
+        whole = full > 0.0 and most >= 0.5 * full  # not halved twice, nor refused
         last, self._last_full = self._last_full, (full if whole else 0.0)
         if whole and last > 0.0:
             self.contraction = full / last
