@@ -78,8 +78,9 @@ class SolverSettings:
             against 12.5, 6-DOF leg: 6 against 11, medians).
         tracking_steps: Most prioritised steps (linearisations) one :meth:`Solver.step` makes with priorities,
             posture or balance: another while the last was taken and left a target off by more than
-            :data:`gsik.control.TRACKING_ERROR` times its tolerance (a first-level target above lower levels' targets,
-            a pin: more than its tolerance), so a dragged target keeps up (the studio's default is 3). 1: one linearisation a step, as the single level's.
+            :data:`gsik.control.TRACKING_ERROR` times its tolerance (a first-level target above lower levels'
+            targets, a pin: more than its tolerance), so a dragged target keeps up (the studio's default is 3). 1: one
+            linearisation a step, as the single level's.
         posture_tolerance: A :meth:`Solver.solve` attempt with a posture (and no balance) ends at a step that
             starts and ends with every target within its tolerances and whose estimate of the posture's change still
             to come (its Gauss-Newton step) is at most this on every DOF [rad]; its steps take the share of the
