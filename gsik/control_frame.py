@@ -20,6 +20,7 @@ import numpy as np
 from gsik import kernels
 from gsik.control_inputs import ControlStats
 from gsik.kernels import frame_step as fk
+from gsik.kernels import step_inputs
 from gsik.result import SolveResult, Status
 from gsik.result_arrays import ResultArrays
 
@@ -58,12 +59,17 @@ class Frame(NamedTuple):
 class ControlFrame:
     """:meth:`_frame_step` for :class:`~gsik.solver.Solver`, which owns the state it works on."""
 
+    #: False: every controlled frame through the general path (``Solver._control_step``, what the frame is tested
+    #: against; tests that watch ``Controller.step`` turn it off).
+    compiled_frame = True
     _frame: Frame | None = None
 
     def _frame_step(self) -> SolveResult | None:
         """A controlled :meth:`step`'s frame through the compiled call, or ``None`` (nothing changed) when the
         general path must run it."""
         c, flags = self._controller, 0
+        if not self.compiled_frame:
+            return None
         if c is None:  # new targets: the controller _make_controller(rows=True) would gather them into
             c, made_for = self._last_controller, self._controller_for
             if c is None or made_for[1] is not self._layout or made_for[0] is not self._skeleton.root \
@@ -107,7 +113,7 @@ class ControlFrame:
     def _make_frame(self, c) -> Frame | None:
         """The :class:`Frame` of controller ``c`` over this solver's buffers, or ``None`` if the compiled frame
         cannot run it."""
-        if not fk.AVAILABLE or c._balance is not None or not c._settings.adaptive_damping or c._rows is None:
+        if not step_inputs.AVAILABLE or c._balance is not None or not c._settings.adaptive_damping or c._rows is None:
             return None
         effectors = self._topo.effector_names
         if c._layout is None or c._layout[0] != effectors:
