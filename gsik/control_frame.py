@@ -25,6 +25,8 @@ from gsik.result import SolveResult, Status
 from gsik.result_arrays import ResultArrays
 
 _new_tuple = tuple.__new__  # a NamedTuple with every field given, without its __new__'s Python call
+_GATHER, _REST, _LAST_HELD, _HELD, _DECLINED = fk.GATHER, fk.REST, fk.LAST_HELD, fk.HELD, fk.DECLINED  # read as globals
+_CONVERGED, _STALLED, _BUDGET_EXHAUSTED = Status.CONVERGED, Status.STALLED, Status.BUDGET_EXHAUSTED
 
 
 class Frame(NamedTuple):
@@ -75,40 +77,44 @@ class ControlFrame:
             if c is None or made_for[1] is not self._layout or made_for[0] is not self._skeleton.root \
                     or made_for[2] is not self._posture or made_for[3] is not self._settings:
                 return None
-            flags = fk.GATHER
+            flags = _GATHER
         if not c.compiled_step:
             return None
         f = self._frame
-        if f is None or f.controller is not c or f.layout is not c._layout or f.rows is not c._rows \
-                or f.restoring != c._restoring or f.buffers is not self._buffers or f.settings is not self._settings:
+        if f is None or f[0] is not c or f[1] is not c._layout or f[2] is not c._rows or f[3] != c._restoring \
+                or f[4] is not self._buffers or f[5] is not self._settings:
             f = self._frame = self._make_frame(c)
             if f is None:
                 return None
+        _, _, _, _, _, _, entry, inputs, arrays, names = f
         if c._rest_damping:
-            flags |= fk.REST
+            flags |= _REST
         if c._last_held:
-            flags |= fk.LAST_HELD
+            flags |= _LAST_HELD
         if c._held is not None:
-            flags |= fk.HELD
-        code, steps, _, held, converged, cost, lagging, step_norm, finite, left = f.entry(f.inputs, flags)
-        if code == fk.DECLINED:
-            return None
+            flags |= _HELD
+        code, steps, _, held, converged, cost, lagging, step_norm, finite, left = entry(inputs, flags)
+        if code:  # DECLINED (nothing changed) or NOT_FINITE
+            return None if code == _DECLINED else self._frame_refused(c, steps)
         # What the general path's _make_controller, Controller._moved, Controller.step and _stats leave.
         self._controller = c
-        c._first, c._rest_damping, c._errors_left = None, False, left
-        if code == fk.NOT_FINITE:
-            c._held = None
-            if steps > 1:
-                c._last_held = False
-            return self._control_refused()
-        c._last_held = held
+        c._first, c._rest_damping, c._errors_left, c._last_held = None, False, left, held
         c._held = (self._q.copy(), self._W.copy(), self._ws.lam[0],
                    _new_tuple(ControlStats, (False, True, converged, cost, 0.0, lagging))) if held else None
         if not finite:
             return self._control_refused()
-        status = Status.CONVERGED if converged else Status.STALLED if held else Status.BUDGET_EXHAUSTED
-        out = f.arrays.take()
-        return _new_tuple(SolveResult, (out[2], status, steps, 0, cost, f.names, out[3], out[4], step_norm, 1))
+        status = _CONVERGED if converged else _STALLED if held else _BUDGET_EXHAUSTED
+        out = arrays.take()
+        return _new_tuple(SolveResult, (out[2], status, steps, 0, cost, names, out[3], out[4], step_norm, 1))
+
+    def _frame_refused(self, c, steps: int) -> SolveResult:
+        """The frame's step ``steps`` of controller ``c`` went non-finite: what the general path leaves, and its
+        refusal."""
+        self._controller = c
+        c._first, c._rest_damping, c._errors_left, c._held = None, False, False, None
+        if steps > 1:  # the steps before it held nothing
+            c._last_held = False
+        return self._control_refused()
 
     def _make_frame(self, c) -> Frame | None:
         """The :class:`Frame` of controller ``c`` over this solver's buffers, or ``None`` if the compiled frame
