@@ -74,7 +74,7 @@ class ControlFrame:
             return None
         if c is None:  # new targets: the controller _make_controller(rows=True) would gather them into
             c, made_for = self._last_controller, self._controller_for
-            if c is None or made_for[1] is not self._layout or made_for[0] is not self._skeleton.root \
+            if c is None or self._balance or made_for[1] is not self._layout or made_for[0] is not self._skeleton.root \
                     or made_for[2] is not self._posture or made_for[3] is not self._settings:
                 return None
             flags = _GATHER

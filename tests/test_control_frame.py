@@ -22,7 +22,8 @@ def _controller_state(solver) -> tuple:
 
 
 def _drag(monkeypatch, frame: bool, studio: bool) -> tuple[list, int]:
-    """A drag that moves, re-sets, reweights and holds its targets, moves the pose from outside and solves once:
+    """A drag that moves, re-sets, reweights and holds its targets, moves the pose from outside, solves once and
+    ends with balance on:
     ``(each frame's result and controller state, frames the compiled frame made)``."""
     made = [0]
     frame_step = ControlFrame._frame_step
@@ -46,6 +47,9 @@ def _drag(monkeypatch, frame: bool, studio: bool) -> tuple[list, int]:
             solver.set_q(np.clip(solver.q + 1e-3, solver.skeleton.lower, solver.skeleton.upper))
         elif frame_index == 40:
             solver.solve(targets)
+        elif frame_index == 80:  # balance from here: its steps are Python's
+            solver.set_balance(True)
+            solver.set_targets(targets)
         else:
             solver.set_targets(targets)
         r = solver.step()
