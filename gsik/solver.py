@@ -9,7 +9,6 @@ frame's ``dq`` is the next frame's starting guess (warm start).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import replace
 
@@ -18,6 +17,7 @@ import numpy as np
 from gsik import control, kernels
 from gsik.attempts import SETTLED_AGREEMENT, SETTLED_REPEATS, AttemptPolicy  # noqa: F401  (re-exported)
 from gsik.balance import center_of_mass
+from gsik.control_frame import ControlFrame
 from gsik.errors import SolverError, choices, show_value
 from gsik.kernels import O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS
 from gsik.kernels import solve as solve_kernels  # noqa: F401  (gsik.solver.solve_kernels, as before)
@@ -45,7 +45,7 @@ _new_tuple = tuple.__new__
 __all__ = ["PAPER_METHOD", "SolveResult", "Solver", "SolverSettings", "Status", "setting_names"]
 
 
-class Solver(TargetSetting, AttemptPolicy):
+class Solver(TargetSetting, AttemptPolicy, ControlFrame):
     """A stateful IK solver for one skeleton.
 
     The solver keeps the joint angles, the pinned root and the previous
@@ -276,6 +276,9 @@ class Solver(TargetSetting, AttemptPolicy):
         if targets is not None:
             self.set_targets(targets)
         if self._is_controlled:
+            result = self._frame_step()  # a drag's frame in one compiled call (gsik.control_frame), else None
+            if result is not None:
+                return result
             self._q_before[:] = self._q
             try:
                 result, finite = self._control_step()
@@ -283,9 +286,7 @@ class Solver(TargetSetting, AttemptPolicy):
                     return result
             except np.linalg.LinAlgError:  # its least squares met non-finite numbers
                 pass
-            self._q[:] = self._q_before  # the prioritised step went non-finite: undo it as the plain one is undone
-            self._refresh_frames()
-            return self._control_result(Status.REFUSED, 1, math.inf, 0.0, 1)
+            return self._control_refused()  # the prioritised step went non-finite: undone as the plain one is
         run = self._plain or self._plain_inputs()
         finite, status, iterations, sweeps, residual, step_norm = run[0](run[2])
         if finite:  # the result _new_result makes, inline: a frame's one method call fewer

@@ -70,7 +70,7 @@ class TargetSetting:
                 :class:`Target`. Nothing changes when it raises.
         """
         checked, layout = self._check_targets(targets)
-        self._targets = checked
+        self._moved, self._target_map = {}, checked  # the _targets setter's, without its call (a frame's every call)
         self._pack_targets(layout)
 
     def set_target(self, name: str, target: Target | None) -> None:
@@ -124,7 +124,7 @@ class TargetSetting:
         if cached is None or cached[0] is not self._layout:
             cached = self._row_bytes = (self._layout, *self._row_places())
         _, rows, places = cached
-        for t, (at_p, at_R) in zip(self._targets.values(), places):
+        for t, (at_p, at_R) in zip(self._target_map.values(), places):  # no moves pending: a packing reads _targets
             if at_p is not None:
                 rows[at_p] = t.position.tobytes()
                 rows[at_R] = t.rotation.tobytes()

@@ -29,6 +29,20 @@ def studio_drag_targets(poses: dict[str, np.ndarray], frame: int, right_weight: 
     return targets
 
 
+def studio_drag_solver(studio: bool) -> tuple[gsik.Solver, dict[str, np.ndarray]]:
+    """``(solver, rest effector poses (4, 4))`` for :func:`studio_drag_targets`: the start pose as the posture, one
+    tracking step, or (``studio``) the bundled prior with three."""
+    from gsik.prior import bundled_prior, use_prior
+
+    solver = gsik.Solver(gsik.load_skeleton("biped"), tracking_steps=3 if studio else 1)
+    poses = solver.effector_poses()
+    if studio:
+        use_prior(solver, bundled_prior("biped"))
+    else:
+        solver.set_posture(solver.q)
+    return solver, poses
+
+
 def hard_level(draw, rng: np.random.Generator, m: int, n: int, error_scale: float = 1.0):
     """A random :class:`gsik.priority.Level` of ``m`` rows on ``n`` DOFs for a hypothesis strategy (``draw``): maybe
     a duplicated row or a zero row (rank-deficient), maybe DOFs it does not move."""

@@ -123,6 +123,7 @@ def _studio_drag(compiled: bool, frames: int, solve: bool, monkeypatch) -> tuple
         return stats
 
     monkeypatch.setattr(gsik.control.Controller, "compiled_step", compiled)
+    monkeypatch.setattr(gsik.Solver, "compiled_frame", False)  # every step through Controller.step, counted here
     monkeypatch.setattr(gsik.control.Controller, "step", counted)
     solver = gsik.Solver(gsik.load_skeleton("biped"), tracking_steps=3)
     poses = solver.effector_poses()

@@ -17,7 +17,7 @@ from gsik.kernels import accept as ak
 from gsik.kernels import gather, step_inputs
 from gsik.prior import bundled_prior, use_prior
 
-from solver_helpers import studio_drag_targets
+from solver_helpers import studio_drag_solver, studio_drag_targets
 
 # Values drawn so that equal, -0.0 against 0.0, NaN and tiny differences all occur.
 VALUE = st.sampled_from([0.0, -0.0, 1.0, 1.0 + 2.0 ** -52, -0.5, 1e-300, float("nan"), float("inf")])
@@ -101,15 +101,11 @@ def _drag(monkeypatch, fresh: bool, studio: bool = False, frames: int = 40) -> l
     evaluated again)."""
     if fresh:
         monkeypatch.setattr(ControlTargets, "retarget_rows", lambda self, packed: False)
+        monkeypatch.setattr(gsik.Solver, "compiled_frame", False)  # its gather and report are compiled in
         report = ControlTargets.report
         monkeypatch.setattr(ControlTargets, "report", lambda self, names, q, R, p, left=False: report(
             self, names, q, R, p, False))
-    solver = gsik.Solver(gsik.load_skeleton("biped"), tracking_steps=3 if studio else 1)
-    poses = solver.effector_poses()
-    if studio:
-        use_prior(solver, bundled_prior("biped"))
-    else:
-        solver.set_posture(solver.q)
+    solver, poses = studio_drag_solver(studio)
     out = []
     for frame in range(frames):
         targets = studio_drag_targets(poses, frame, 0.5 if frame % 9 == 4 else 1.0)
@@ -268,6 +264,7 @@ def test_a_controlled_step_that_leaves_a_non_finite_angle_is_refused_and_undone(
         return gsik.control.ControlStats(True, False, True, 0.0, 0.0)
 
     monkeypatch.setattr(gsik.control.Controller, "step", poisoned)
+    monkeypatch.setattr(gsik.Solver, "compiled_frame", False)  # the general path (the frame: test_control_frame)
     r = solver.step()
     assert r.status is gsik.Status.REFUSED and r.q.tobytes() == before.tobytes() == solver.q.tobytes()
     assert not c.report(solver.effector_names, np.full(len(before), math.inf), solver._ws.R, solver._ws.p).finite

@@ -59,6 +59,7 @@ def _drag(monkeypatch, compiled: bool, posture: str, hand_priority: int, frames:
         return trial
 
     monkeypatch.setattr(gsik.control.Controller, "compiled_step", compiled)
+    monkeypatch.setattr(gsik.Solver, "compiled_frame", False)  # every step through Controller.step, watched here
     monkeypatch.setattr(gsik.control.Controller, "settle_refusals", settle)
     for name, f in (("step", recorded), ("_damped_trial", counted), ("_targets_alone", alone),
                     ("_correction", corrected)):

@@ -1,0 +1,126 @@
+"""A drag's prioritised frame in one compiled call: gather the moved targets, step, report.
+
+A :meth:`gsik.Solver.step` with priorities, a posture or balance made ~6 Python calls around its compiled step: the
+targets gathered from the packed rows (:func:`gsik.kernels.gather.gather_targets`), up to ``tracking_steps``
+steps (:func:`gsik.kernels.step_inputs.control_step`) each judged in Python (held, creeping, lagging), the steps'
+norm, and the result's angles and errors (:func:`gsik.kernels.gather.gather_result` or
+:func:`gsik.kernels.control.report_errors`). :func:`frame_step` runs the same, bit for bit, over a
+:class:`FrameInputs` (the controller's :class:`~gsik.kernels.step_inputs.StepInputs` and the solver's persistent
+arrays: one object to unbox), and writes the result's angles and errors into ``values``. The Python around it
+(:mod:`gsik.control_frame`) keeps the controller's held pose and damping bookkeeping.
+"""
+
+from __future__ import annotations
+
+import math
+
+from gsik._jit import njit
+from gsik.kernels import control as ck
+from gsik.kernels import gather, priority
+from gsik.kernels import step_inputs
+from gsik.kernels.accept import creeps, norm, share_bounded
+
+#: :func:`frame_step`'s ``flags``: gather the targets from the packed rows first (the controller was not retargeted
+#: since the targets were set); the controller restarts from the base damping (``Controller._rest_damping``); its
+#: last step held the pose (``Controller._last_held``: new targets then restart from the base damping); it holds a
+#: held pose (``Controller._held``: a frame whose targets did not move is left to the Python path).
+GATHER, REST, LAST_HELD, HELD = 1, 2, 4, 8
+#: :func:`frame_step`'s first result: stepped (the rest of the tuple holds), declined (nothing changed: the Python
+#: path runs the frame), or a level's Jacobian went non-finite (the angles are to be restored).
+STEPPED, DECLINED, NOT_FINITE = 0, 1, 2
+
+#: What a :class:`FrameInputs` holds.
+FIELDS = ("step", "position", "rotation", "row_weight", "rows", "tp", "tR", "row_w", "index", "used", "e", "err", "M",
+          "q", "W", "R", "p", "lam", "q_before", "diff", "values", "reported", "tracking_steps", "posture_on")
+
+#: False without numba or with ``NUMBA_DISABLE_JIT``: every frame takes the Python path.
+AVAILABLE = step_inputs.AVAILABLE
+
+if AVAILABLE:
+    from numba.core import types
+    from numba.experimental import structref
+
+    @structref.register
+    class FrameInputsType(types.StructRef):
+        """The numba type of a :class:`FrameInputs`: its fields' types as given (no literals)."""
+
+        def preprocess_fields(self, fields):
+            return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+    class FrameInputs(structref.StructRefProxy):
+        """A controller's :class:`~gsik.kernels.step_inputs.StepInputs` and the arrays a frame reads and writes
+        (:data:`FIELDS`)."""
+
+    structref.define_proxy(FrameInputs, FrameInputsType, list(FIELDS))
+
+    @njit(cache=True)
+    def make_frame_inputs(step, position, rotation, row_weight, rows, tp, tR, row_w, index, used, e, err, M, q, W, R,
+                          p, lam, q_before, diff, values, reported, tracking_steps, posture_on):
+        """A :class:`FrameInputs` of these (made by compiled code, which is cached)."""
+        return FrameInputs(step, position, rotation, row_weight, rows, tp, tR, row_w, index, used, e, err, M, q, W, R,
+                           p, lam, q_before, diff, values, reported, tracking_steps, posture_on)
+
+    @njit(cache=True)
+    def frame_step(f, flags):
+        """One prioritised frame over ``f`` (:class:`FrameInputs`), ``flags`` (:data:`GATHER` ...): the targets
+        gathered (with :data:`GATHER`), ``f.q`` saved to ``f.q_before``, then up to ``f.tracking_steps`` steps
+        (another while the last was committed, did not hold and left a target lagging), and the result's values
+        (n + 2k,) into ``f.values``: the angles, then the errors :meth:`gsik.control.Controller.report` reports
+        (``f.reported``: a (2, k) view of them).
+
+        Returns ``(code, steps, accepted, held, converged, cost, lagging, step_norm, finite, errors_left)`` of the
+        last step (``code`` :data:`STEPPED`, :data:`DECLINED` or :data:`NOT_FINITE`); ``step_norm`` [rad] is the
+        whole change of the angles, ``finite`` whether their squares' sum is, ``errors_left`` whether the reported
+        errors are those the last step left (committed)."""
+        s = f.step
+        cache, window = s.cache, s.window
+        rest = (flags & REST) != 0
+        if flags & GATHER:
+            code = gather.gather_targets(f.position, f.rotation, f.row_weight, f.rows, f.tp, f.tR, f.row_w,
+                                         cache.flags, window.ring)
+            if code == gather.DECLINED or (code == gather.SAME and (flags & HELD) != 0):
+                return DECLINED, 0, False, False, False, 0.0, False, 0.0, False, False
+            if code == gather.MOVED:
+                rest = (flags & LAST_HELD) != 0
+        elif flags & HELD:
+            return DECLINED, 0, False, False, False, 0.0, False, 0.0, False, False
+        q, W, R, p, lam = f.q, f.W, f.R, f.p, f.lam
+        f.q_before[:] = q
+        if rest:
+            lam[0] = s.base
+        tolerance = s.stall_tolerance
+        steps = 0
+        accepted = held = converged = lagging = committed = False
+        cost = step_norm = 0.0
+        for steps in range(1, f.tracking_steps + 1):
+            end = step_inputs.control_step(s, W, q, R, p, lam, lam[0])
+            if end[0] != priority.OK:
+                return NOT_FINITE, steps, False, False, False, 0.0, False, 0.0, False, False
+            committed = end[1] > 0.0
+            converged, cost, lagging = end[3] > 0.0, end[4], end[5] > 0.0
+            if committed:  # gsik.control.Controller._committed
+                step_norm, crept = end[6], end[2]
+                if crept < 0.0:
+                    crept = 1.0 if not step_norm <= tolerance and creeps(window, cache.met, f.posture_on,
+                                                                         cache.costs) else 0.0
+                accepted, held = True, step_norm <= tolerance or crept > 0.0
+            else:
+                accepted, held, step_norm = False, end[2] > 0.0, 0.0
+            if not lagging or held or not accepted:
+                break
+        # Not converged while the posture's share of a step is bounded: it has further to go (Solver._control_step)
+        converged = converged and not share_bounded(s.posture, s.wk)
+        if steps > 1:
+            for d in range(q.shape[0]):
+                f.diff[d] = q[d] - f.q_before[d]
+            step_norm = norm(f.diff)
+        n, values = q.shape[0], f.values
+        if committed:
+            squares = gather.gather_result(q, s.wk.err, f.used, values)
+        else:
+            squares = 0.0
+            for d in range(n):
+                values[d] = q[d]
+                squares += q[d] * q[d]
+            ck.report_errors(R, p, s.tasks, f.index, f.e, f.err, f.M, f.reported)
+        return STEPPED, steps, accepted, held, converged, cost, lagging, step_norm, math.isfinite(squares), committed
