@@ -10,8 +10,10 @@ the drag's start pose (``pins``: a diagonal factor). Printed, one run:
    loop (no dispatch), medians over the frames [µs]: the strict-priority kernel (pivoted QR every level) on its first
    1, 2 and all 3 packed levels (the last's cost is the difference; the pins' and hands' levels alone are what a
    restoring step solves), the step's kernel on all of them as the step calls it
-   (:func:`~gsik.kernels.posture_level.prioritized_step_posture`: a full posture by its normal equations),
-   :func:`~gsik.kernels.control.linearise`, :func:`~gsik.kernels.control.trial` (forward kinematics and level state).
+   (:func:`~gsik.kernels.posture_level.prioritized_step_posture`: a full posture by its normal equations; a diagonal
+   one, which the step solves by the pivoted QR, timed by its normal equations too, unbounded: what that would save),
+   :func:`~gsik.kernels.control.linearise`, :func:`~gsik.kernels.control.trial` (forward kinematics and level state),
+   and :func:`~gsik.kernels.control.step_trial` (the three, with the dampings and the box, as a step calls them).
 
 Run: ``python benchmarks/bench_priority_pieces.py [--posture prior|pins] [--frames 300]``. Nothing here is asserted
 by the tests.
@@ -60,6 +62,14 @@ def _trial_loop(repeat, fk, tasks, posture, root, W, lower, upper, q, dq, wk):
         control.trial(fk, tasks, posture, root, W, lower, upper, q, dq, 1.0, wk)
 
 
+@njit
+def _step_trial_loop(repeat, task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, e, costs, lam,
+                     base, near, tols, wk):
+    for _ in range(repeat):
+        control.step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, R, p, e, costs, lam,
+                           base, near, tols, wk)
+
+
 def _cpu_us(loop, repeat: int, *args) -> float:
     """µs of CPU time per pass of ``loop(repeat, *args)`` (compiled and warmed first)."""
     loop(1, *args)
@@ -82,13 +92,21 @@ def _pieces(solver, repeat: int) -> dict[str, float]:
     for levels in range(1, len(wk.dampings) + 1):
         out[f"priority kernel, levels 0-{levels - 1}"] = _cpu_us(
             _priority_loop, repeat, *packed, tasks.starts[:levels + 1], wk.dampings[:levels], wk.lo, wk.hi, c._tols, dq)
+    rows = c._posture_rows
     out["the step's kernel, all levels"] = _cpu_us(_posture_loop, repeat, *packed, tasks.starts, wk.dampings, wk.lo,
-                                                    wk.hi, c._tols, c._posture_rows.normal,
-                                                    c._posture_rows.share[0], dq, wk.below)
+                                                    wk.hi, c._tols, rows.normal, rows.share[0], dq, wk.below)
+    if rows.normal.shape[0] == 0 and rows.factor.shape[0] > 0:  # a diagonal posture (pins): its normal equations
+        out["  the same, posture by normal eq."] = _cpu_us(
+            _posture_loop, repeat, *packed, tasks.starts, wk.dampings, wk.lo, wk.hi, c._tols,
+            np.ascontiguousarray(rows.factor.T @ rows.factor), 0.0, dq, wk.below)
     out["linearise"] = _cpu_us(_linearise_loop, repeat, c._task_model, tasks, c._posture_rows, q, R, p,
                                c._cache.e.copy(), wk)
     out["trial (FK + level state)"] = _cpu_us(_trial_loop, repeat, c._fk_model, tasks, c._posture_rows, c._root,
                                               solver._W, c._lower, c._upper, q, dq, wk)
+    out["step_trial (all of the above)"] = _cpu_us(
+        _step_trial_loop, repeat, c._task_model, c._fk_model, tasks, rows, c._root, solver._W, c._lower, c._upper,
+        s.max_step, q, R, p, c._cache.e.copy(), c._cache.costs.copy(), solver._ws.lam[0], s.damping, c._near, c._tols,
+        wk)
     return out
 
 
