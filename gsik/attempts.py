@@ -397,13 +397,14 @@ class AttemptPolicy:
         if posture is not None:
             c.settle_steps(self._settings.posture_tolerance)  # a worse step that settles it is not retried
         q, W, R, p, step = self._q, self._W, self._ws.R, self._ws.p, c.step  # read once, not per step
+        settled, first_step = (None, None) if posture is None else (posture.settled, c.first_step)
         try:
             for it in range(1, iterations + 1):
-                before = q.copy() if posture is not None else None
+                before = q.copy() if settled is not None else None
                 st = step(q, W, R, p, lam)
                 if st.held or (st.converged and not settles):
                     break
-                if posture is not None and posture.settled(c.first_step(), q - before, st.converged):
+                if settled is not None and settled(first_step(), q - before, st.converged):
                     st = st._replace(held=True)
                     break
         finally:

@@ -161,7 +161,10 @@ class ControlTargets:
     def target_cost(self, R, p) -> float:
         """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
         self._task_errors(R, p)
-        return float(0.5 * (self._row_w * self._e.reshape(-1, 6) ** 2).sum())
+        e = self._e.reshape(-1, 6)
+        squares = e * e  # as ``e ** 2``, then in place: the same values and sum, bit for bit, without two arrays
+        squares *= self._row_w
+        return 0.5 * float(squares.sum())
 
     def converged(self, R, p) -> bool:
         """True if every target is within the position and orientation tolerances."""

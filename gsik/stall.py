@@ -127,6 +127,7 @@ class PostureSettle:
         self._converged = converged
         self.gain = gain
         self._moved = None  # the last posture move (n_dofs,) [rad], or None
+        self._moved_square = None  # its dot with itself if the secant that kept it read it (the next reads it again)
         self._warm = contraction is not None
         self._carried = contraction or 0.0
         self.contraction = self._carried
@@ -166,9 +167,12 @@ class PostureSettle:
 
     def _secant(self, moved: np.ndarray) -> None:
         """The gain from this posture move (n_dofs,) [rad] and the last one, when they lie along one line."""
-        last, self._moved = self._moved, moved
+        last, ll, self._moved, self._moved_square = self._moved, self._moved_square, moved, None
         if last is None:
             return
-        dot, mm, ll = float(moved.dot(last)), float(moved.dot(moved)), float(last.dot(last))
+        dot, mm = float(moved.dot(last)), float(moved.dot(moved))
+        if ll is None:
+            ll = float(last.dot(last))
+        self._moved_square = mm
         if dot * dot >= COLLINEAR * mm * ll and dot < ll:  # along one line, mu = dot / ll below 1
             self.gain[0] = min(1.0, max(MIN_POSTURE_GAIN, float(self.gain[0]) / (1.0 - dot / ll)))

@@ -96,6 +96,19 @@ def test_posture_moves_that_close_in_slowly_take_more_of_the_step_up_to_all_of_i
     assert _gain_after(MOVE, -10.0 * MOVE, gain=0.5) == pytest.approx(0.1)  # at least MIN_POSTURE_GAIN
 
 
+def test_each_secant_reads_the_length_of_the_move_just_before_it():
+    # MOVE then 2 MOVE: mu = 2, no gain from it; then -2 MOVE against 2 MOVE: mu = -1 (against MOVE it would be -4).
+    assert _gain_after(MOVE, 2.0 * MOVE, -2.0 * MOVE, gain=0.5) == pytest.approx(0.25)
+    settle = _settle(gain=0.5)
+    settle.settled(MOVE, MOVE, True)
+    settle.settled(2.0 * MOVE, 2.0 * MOVE, True)
+    settle.settled(MOVE, MOVE, False)  # a target off: no posture move, none to measure against
+    settle.settled(MOVE, MOVE, True)  # started with a target off: not a posture move either
+    for m in (3.0 * MOVE, -3.0 * MOVE):  # a new pair, measured against each other only: mu = -1
+        settle.settled(m, m, True)
+    assert float(settle.gain[0]) == pytest.approx(0.25)
+
+
 def test_moves_that_turn_or_are_not_the_posture_move_leave_the_share_as_it_is():
     turned = np.array([1e-2, 3e-2, 0.0])  # orthogonal to MOVE: no curvature along one line measured
     assert _gain_after(MOVE, turned, gain=0.5) == 0.5
