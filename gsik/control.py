@@ -345,8 +345,8 @@ class Controller(ControlTargets):
 
     def _committed(self, end: tuple) -> ControlStats:
         """The :class:`ControlStats` of a step :func:`~gsik.kernels.accept.control_step` committed (``end``: what
-        :func:`gsik.kernels.step_inputs.control_step` returns), as :func:`~gsik.kernels.accept.committed_stats`
-        makes them: held when the step's norm (:func:`gsik.kernels.step_inputs.norm`) is at most the stall tolerance
+        :func:`gsik.kernels.step_inputs.control_step` returns; :func:`gsik.kernels.frame_step.frame_step` judges
+        the same): held when the step's norm (:func:`gsik.kernels.step_inputs.norm`) is at most the stall tolerance
         or the stall window says it creeps (asked here when the kernel left it to that norm)."""
         cache, tolerance = self._cache, self._settings.stall_tolerance
         _, _, crept, converged, target_cost, lagging, step_norm = end

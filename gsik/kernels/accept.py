@@ -24,7 +24,6 @@ import numpy as np
 
 from gsik._jit import njit
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState
-from gsik.control_inputs import ControlStats
 from gsik.kernels import priority
 from gsik.kernels.control import O_CONVERGED, O_LAGGING, O_SHARE, O_STATUS, O_TARGET_COST, box, level_state, \
     linearise, step_trial, trial
@@ -107,19 +106,6 @@ def store(cache: LevelCache, q: np.ndarray, W: np.ndarray, state: LevelState) ->
     cache.q[:], cache.W[:], cache.costs[:], cache.met[:] = q, W, state.costs, state.met
     cache.anchors[:], cache.e[:] = state.anchors, state.error
     cache.flags[:] = 1.0, float(state.converged), state.target_cost, float(state.lagging)
-
-
-def committed_stats(cache: LevelCache, window, posture_on: bool, stall_tolerance: float) -> ControlStats:
-    """The :class:`~gsik.control_inputs.ControlStats` of a step :func:`control_step` committed: held when its norm
-    is at most ``stall_tolerance`` [rad] or the stall window says it creeps (asked here when the kernel left it to
-    NumPy's norm: ``R_CREEPS`` -1)."""
-    step_norm = math.sqrt(float(cache.moved @ cache.moved))  # NumPy's sum, as a step of the Python branches
-    crept = float(cache.out[R_CREEPS])
-    if crept < 0.0:
-        crept = not step_norm <= stall_tolerance and creeps(window, cache.met, posture_on, cache.costs)
-    flags = cache.flags.tolist()
-    return ControlStats(True, step_norm <= stall_tolerance or crept > 0.0, flags[F_CONVERGED] > 0.0,
-                        flags[F_TARGET_COST], step_norm, flags[F_LAGGING] > 0.0)
 
 
 class StallWindow(NamedTuple):
