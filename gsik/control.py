@@ -400,6 +400,11 @@ class Controller(ControlTargets):
         self._restoring = SETTLE_RESTORING_STEPS if on else RESTORING_STEPS
         rows.share[0] = ck.POSTURE_SHARE if tolerance <= 0.0 and rows.normal.shape[0] else 0.0
 
+    def share_bounded(self) -> bool:
+        """True if the last step's posture share was scaled onto its bound (:func:`gsik.kernels.accept.share_bounded`):
+        the posture has further to go than one step takes, so a pose with every target met has not settled yet."""
+        return self._work.out[ck.O_SHARE] > self._posture_rows.share[0]
+
     def _settles(self, state0: LevelState, dq: np.ndarray) -> bool:
         """True if the full step ``dq`` (n,) [rad] from the start state ``state0`` settles the posture
         (:class:`gsik.stall.PostureSettle`'s test at :meth:`settle_steps`'s tolerance; compiled:

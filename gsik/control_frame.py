@@ -73,9 +73,8 @@ class ControlFrame:
         if not self.compiled_frame:
             return None
         if c is None:  # new targets: the controller _make_controller(rows=True) would gather them into
-            c, made_for = self._last_controller, self._controller_for
-            if c is None or self._balance or made_for[1] is not self._layout or made_for[0] is not self._skeleton.root \
-                    or made_for[2] is not self._posture or made_for[3] is not self._settings:
+            c = self._fitting_controller()
+            if c is None:
                 return None
             flags = _GATHER
         if not c.compiled_step:
@@ -106,6 +105,16 @@ class ControlFrame:
         status = _CONVERGED if converged else _STALLED if held else _BUDGET_EXHAUSTED
         out = arrays.take()
         return _new_tuple(SolveResult, (out[2], status, steps, 0, cost, names, out[3], out[4], step_norm, 1))
+
+    def _fitting_controller(self):
+        """The last :class:`gsik.control.Controller` if it was made for the current root, packed layout (names,
+        weights, priorities), posture and settings, without balance (whose support is made every time): only its
+        targets' values may have changed. Else ``None``. Also ``Solver._make_controller``'s test."""
+        last, made_for = self._last_controller, self._controller_for
+        if last is None or self._balance or made_for[1] is not self._layout or made_for[0] is not self._skeleton.root \
+                or made_for[2] is not self._posture or made_for[3] is not self._settings:
+            return None
+        return last
 
     def _frame_refused(self, c, steps: int) -> SolveResult:
         """The frame's step ``steps`` of controller ``c`` went non-finite: what the general path leaves, and its

@@ -170,11 +170,6 @@ class ControlTargets:
         """True if every target is within the position and orientation tolerances."""
         return self.within_tolerances(*self.error_lists(R, p))
 
-    def share_bounded(self) -> bool:
-        """True if the last step's posture share was scaled onto its bound (:func:`gsik.kernels.accept.share_bounded`):
-        the posture has further to go than one step takes, so a pose with every target met has not settled yet."""
-        return self._work.out[ck.O_SHARE] > self._posture_rows.share[0]
-
     def within_tolerances(self, pos: list[float], ori: list[float]) -> bool:
         """True if every position error [m] in ``pos`` and orientation error [rad] in ``ori`` is within the
         settings' tolerances (a NaN is not)."""

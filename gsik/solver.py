@@ -421,13 +421,12 @@ class Solver(TargetSetting, AttemptPolicy, ControlFrame):
         there), so a drag's moved targets are gathered from them (:meth:`gsik.control.Controller.retarget_rows`)."""
         if self._controller is None:
             sk, ow = self._skeleton, self._settings.orientation_weight
-            last, made_for = self._last_controller, self._controller_for
-            if not self._balance and last is not None and made_for[1] is self._layout and made_for[0] is sk.root \
-                    and made_for[2] is self._posture and made_for[3] is self._settings:
-                # The same packed layout (names, weights, priorities), root, posture and settings.
+            last = self._fitting_controller()  # made for this root, packed layout, posture and settings
+            if last is not None:
                 if not (rows and last.retarget_rows(self._packed)):
                     last.retarget_targets(self._targets, ow)
             else:
+                last = self._last_controller
                 balance = control.support(sk, self._targets, self._ws.p) if self._balance else None
                 key = control.structure_of(sk.root, {n: t.priority for n, t in self._targets.items()},
                                            self._posture, balance, self._settings)

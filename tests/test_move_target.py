@@ -210,7 +210,8 @@ def test_a_solve_with_restarts_keeps_the_moved_target(arm):
 
 
 @settings(max_examples=80, deadline=None)
-@given(seed=st.integers(0, 2 ** 32 - 1), tilt=st.sampled_from([0.0, 1e-14, 1e-13, 4e-13, 1e-12, 3e-12, 1e-9, 1e-4, 1.0]),
+@given(seed=st.integers(0, 2 ** 32 - 1),
+       tilt=st.sampled_from([0.0, 1e-14, 1e-13, 4e-13, 1e-12, 3e-12, 1e-9, 1e-4, 1.0]),
        far=st.sampled_from([None, 1e6, 1e6 * (1.0 + 2e-16), 1e6 + 1.0, np.inf, np.nan]), turned=st.booleans(),
        flip=st.booleans())
 def test_a_float_array_moves_as_the_replaced_target_or_raises_as_it(arm, seed, tilt, far, turned, flip):

@@ -145,7 +145,8 @@ def make_work(n_frames: int, n_dofs: int, n_tasks: int, n_packed: int, n_levels:
     return ControlWork(np.zeros((6 * m, n)), np.zeros((n_packed, n)), np.zeros(n_packed), np.zeros(n_packed),
                        np.zeros(n_packed_levels), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                        np.zeros((n_frames, 3, 3)), np.zeros((n_frames, 3)), np.zeros(6 * m), np.zeros((2, m)),
-                       np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(5), np.zeros(n))
+                       np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(5),
+                       np.zeros(n))
 
 
 @njit(cache=True, _nrt=False)
