@@ -399,6 +399,10 @@ class AttemptPolicy:
         q, W, R, p, step = self._q, self._W, self._ws.R, self._ws.p, c.step  # read once, not per step
         settled, first_step = (None, None) if posture is None else (posture.settled, c.first_step)
         try:
+            done = None if posture is None else c.steps_until_settled(q, W, R, p, lam, iterations, posture)
+            if done is not None:  # the loop below in one compiled call
+                st, it = done
+                return st, it
             for it in range(1, iterations + 1):
                 before = q.copy() if settled is not None else None
                 st = step(q, W, R, p, lam)

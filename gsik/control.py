@@ -33,6 +33,7 @@ from gsik.balance import center_of_mass, com_jacobian, nearest_point_inside, shr
 from gsik.control_inputs import (CONSTRAINT_TRACKING_ERROR, GROUND_TOLERANCE, TRACKING_ERROR, Balance,  # noqa: F401
                                  ControlStats, FrameTask, Posture, frame_tasks, lag_factors, structure, support)
 from gsik.control_inputs import _ordered, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
+from gsik.control_settle import ControlSettle
 from gsik.control_targets import ControlReport, ControlTargets, _same  # noqa: F401  (ControlReport re-exported)
 from gsik.kernels import compiled_entry
 from gsik.kernels import accept as ak
@@ -76,7 +77,7 @@ BALANCE_BAND = 0.005
 BALANCE_TOLERANCE = 0.001
 
 
-class Controller(ControlTargets):
+class Controller(ControlTargets, ControlSettle):
     """Prioritised IK steps for one skeleton seen from one root.
 
     Every level's state and the linearised, packed levels come from compiled code (:mod:`gsik.kernels.control`):
@@ -185,6 +186,7 @@ class Controller(ControlTargets):
         self._window = ak.make_window(np.sqrt(np.append(self._near, 0.0)))  # the posture's: its own size only
         self._cache = ak.make_cache(self._sk.n_dofs, len(self._tasks), L)  # the last accepted pose's levels
         self._step_calls = {}  # restoring steps: (compiled entry, StepInputs), made at the first such compiled step
+        self._settle_calls = {}  # restoring steps: steps_until_settled's compiled call, made at its first
 
 
     def _call(self, kernel, *args):

@@ -13,7 +13,8 @@ import math
 
 import numpy as np
 
-from gsik.kernels.settle import largest_pair
+from gsik.kernels import settle
+from gsik.kernels.settle import COLLINEAR, CONTRACTION, MIN_POSTURE_GAIN  # noqa: F401  (re-exported)
 
 #: A stall is judged over this many steps, taken or refused (a run of refusals while the damping climbs is one) ...
 STALL_WINDOW = 6
@@ -74,16 +75,6 @@ def unmet_levels(met: np.ndarray, posture_on: bool) -> list[bool]:
     return unmet
 
 
-#: The least share of the posture's Gauss-Newton step a solve's step takes (:class:`PostureSettle`'s secant gain).
-MIN_POSTURE_GAIN = 0.1
-#: Two posture moves measure the curvature along one direction when the square of their cosine is at least this
-#: (within 25 degrees of one line): others turned, and their ratio says nothing about the step's length.
-COLLINEAR = 0.81
-#: A warm attempt's steps contracting by at least this factor a step converge linearly: the next full step is
-#: estimated as the last one times the contraction (:class:`PostureSettle`).
-CONTRACTION = 0.5
-
-
 class PostureSettle:
     """A prioritised solve's posture: the share of its Gauss-Newton step each step takes, and whether it has settled.
 
@@ -123,56 +114,27 @@ class PostureSettle:
     """
 
     def __init__(self, tolerance: float, converged: bool, gain: np.ndarray, contraction: float | None = None):
-        self._tolerance = tolerance
-        self._converged = converged
         self.gain = gain
-        self._moved = None  # the last posture move (n_dofs,) [rad], or None
-        self._moved_square = None  # its dot with itself if the secant that kept it read it (the next reads it again)
-        self._warm = contraction is not None
-        self._carried = contraction or 0.0
-        self.contraction = self._carried
-        self._last_full = 0.0  # the last step's largest DOF [rad] if it was taken whole, else 0
+        #: (STATE_SIZE,) the test's state (gsik.kernels.settle.TOLERANCE ...), read and written by settled()
+        carried = contraction or 0.0
+        self.state = np.array([tolerance, converged, contraction is not None, carried, carried, 0.0, 0.0])
+        self.last_move = np.zeros(0)  # the last posture move (n_dofs,) [rad], sized at the first step
+
+    @property
+    def contraction(self) -> float:
+        """The ratio of the last two whole steps' largest DOFs measured last (or the one carried in)."""
+        return float(self.state[settle.CONTRACTION_NOW])
 
     def settled(self, step: np.ndarray, moved: np.ndarray, converged: bool) -> bool:
-        """True if this step settles the posture; adapts the gain from this step's move and the last one's.
+        """True if this step settles the posture; adapts the gain from this step's move and the last one's
+        (:func:`gsik.kernels.settle.settled`: the compiled loop of steps takes the same test).
 
         Args:
             step: (n_dofs,) the full prioritised step computed at the step's start pose [rad], whether it was taken
                 whole, halved or refused.
-            moved: (n_dofs,) the change of the angles the step made [rad] (0 if refused); kept, not copied.
+            moved: (n_dofs,) the change of the angles the step made [rad] (0 if refused).
             converged: Every target is within its tolerances after the step.
         """
-        within, self._converged = self._converged and converged, converged
-        full, most = largest_pair(step, moved)  # each float(np.abs(x).max()), in one compiled call
-        whole = full > 0.0 and most >= 0.5 * full  # not halved twice, nor refused
-        last, self._last_full = self._last_full, (full if whole else 0.0)
-        if whole and last > 0.0:
-            self.contraction = full / last
-        if not within:
-            self._moved = None
-            return self._warm and converged and whole and self._predicted(full, last)
-        if whole:  # a posture move
-            self._secant(moved)
-        if not self._warm:
-            return full <= self._tolerance * float(self.gain[0])
-        return full <= self._tolerance or (whole and self._predicted(full, last))
-
-    def _predicted(self, full: float, last: float) -> bool:
-        """True if the next step's full step, this one's largest DOF ``full`` [rad] times the contraction (its ratio
-        to the last whole step's ``last``, or the carried one if larger), passes the warm settle test."""
-        if not last > 0.0:
-            return False
-        contraction = max(full / last, self._carried)
-        return contraction <= CONTRACTION and contraction * full <= self._tolerance
-
-    def _secant(self, moved: np.ndarray) -> None:
-        """The gain from this posture move (n_dofs,) [rad] and the last one, when they lie along one line."""
-        last, ll, self._moved, self._moved_square = self._moved, self._moved_square, moved, None
-        if last is None:
-            return
-        dot, mm = float(moved.dot(last)), float(moved.dot(moved))
-        if ll is None:
-            ll = float(last.dot(last))
-        self._moved_square = mm
-        if dot * dot >= COLLINEAR * mm * ll and dot < ll:  # along one line, mu = dot / ll below 1
-            self.gain[0] = min(1.0, max(MIN_POSTURE_GAIN, float(self.gain[0]) / (1.0 - dot / ll)))
+        if self.last_move.shape != moved.shape:
+            self.last_move = np.zeros(moved.shape)
+        return settle.settled(self.state, self.gain, step, moved, self.last_move, converged)

@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 import gsik
 import gsik.control
+from gsik.control_settle import ControlSettle
 from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
 from gsik.kernels import accept as ak
 from gsik.kernels.control import O_SHARE, make_work, posture_rows
@@ -124,6 +125,7 @@ def _studio_drag(compiled: bool, frames: int, solve: bool, monkeypatch) -> tuple
 
     monkeypatch.setattr(gsik.control.Controller, "compiled_step", compiled)
     monkeypatch.setattr(gsik.Solver, "compiled_frame", False)  # every step through Controller.step, counted here
+    monkeypatch.setattr(ControlSettle, "compiled_settle", False)  # a solve()'s steps too
     monkeypatch.setattr(gsik.control.Controller, "step", counted)
     solver = gsik.Solver(gsik.load_skeleton("biped"), tracking_steps=3)
     poses = solver.effector_poses()

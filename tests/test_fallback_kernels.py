@@ -13,6 +13,7 @@ from solver_helpers import studio_drag_targets
 
 import gsik
 import gsik.control
+from gsik.control_settle import ControlSettle
 from gsik.kernels import fallback
 from gsik.prior import bundled_prior, use_prior
 
@@ -60,6 +61,7 @@ def _drag(monkeypatch, compiled: bool, posture: str, hand_priority: int, frames:
 
     monkeypatch.setattr(gsik.control.Controller, "compiled_step", compiled)
     monkeypatch.setattr(gsik.Solver, "compiled_frame", False)  # every step through Controller.step, watched here
+    monkeypatch.setattr(ControlSettle, "compiled_settle", False)  # a solve()'s steps too
     monkeypatch.setattr(gsik.control.Controller, "settle_refusals", settle)
     for name, f in (("step", recorded), ("_damped_trial", counted), ("_targets_alone", alone),
                     ("_correction", corrected)):

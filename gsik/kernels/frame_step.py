@@ -18,7 +18,7 @@ from gsik._jit import njit
 from gsik.kernels import control as ck
 from gsik.kernels import gather, priority
 from gsik.kernels import step_inputs
-from gsik.kernels.accept import creeps, norm, share_bounded
+from gsik.kernels.accept import norm, share_bounded
 
 #: :func:`frame_step`'s ``flags``: gather the targets from the packed rows first (the controller was not retargeted
 #: since the targets were set); the controller restarts from the base damping (``Controller._rest_damping``); its
@@ -88,7 +88,6 @@ if AVAILABLE:
         f.q_before[:] = q
         if rest:
             lam[0] = s.base
-        tolerance = s.stall_tolerance
         steps = 0
         accepted = held = converged = lagging = committed = False
         cost = step_norm = 0.0
@@ -98,14 +97,7 @@ if AVAILABLE:
                 return NOT_FINITE, steps, False, False, False, 0.0, False, 0.0, False, False
             committed = end[1] > 0.0
             converged, cost, lagging = end[3] > 0.0, end[4], end[5] > 0.0
-            if committed:  # gsik.control.Controller._committed
-                step_norm, crept = end[6], end[2]
-                if crept < 0.0:
-                    crept = 1.0 if not step_norm <= tolerance and creeps(window, cache.met, f.posture_on,
-                                                                         cache.costs) else 0.0
-                accepted, held = True, step_norm <= tolerance or crept > 0.0
-            else:
-                accepted, held, step_norm = False, end[2] > 0.0, 0.0
+            accepted, held, step_norm = step_inputs.judged(s, end, f.posture_on)
             if not lagging or held or not accepted:
                 break
         # Not converged while the posture's share of a step is bounded: it has further to go (Solver._control_step)

@@ -12,6 +12,7 @@ from __future__ import annotations
 from gsik._jit import njit
 from gsik.kernels import accept as ak
 from gsik.kernels import fallback as fb
+from gsik.kernels.accept import creeps
 from gsik.kernels.accept import norm  # noqa: F401  (every controlled step's norm, as before)
 
 #: What a :class:`StepInputs` holds, in :func:`gsik.kernels.accept.control_step`'s order around the per-step
@@ -56,3 +57,18 @@ if AVAILABLE:
                         lam, damping, s.base, s.near, s.tols, s.floors, s.rule, s.restoring, s.stall_tolerance,
                         s.cache, s.window, s.wk)
         return fb.step_end(s.cache)
+
+    @njit(cache=True)
+    def judged(inputs, end, posture_on):
+        """``(accepted, held, step_norm)`` of a step that ended in ``end`` (what :func:`control_step` returns), as
+        ``gsik.control.Controller`` judges it: a committed step holds when its norm [rad] is at most the stall
+        tolerance or the stall window says it creeps (asked here when the kernel left it to that norm); a refused
+        one as the kernel said."""
+        if end[1] > 0.0:  # committed: gsik.control.Controller._committed
+            step_norm, crept = end[6], end[2]
+            if crept < 0.0:
+                s = inputs
+                crept = 1.0 if not step_norm <= s.stall_tolerance and creeps(s.window, s.cache.met, posture_on,
+                                                                               s.cache.costs) else 0.0
+            return True, step_norm <= inputs.stall_tolerance or crept > 0.0, step_norm
+        return False, end[2] > 0.0, 0.0

@@ -1,0 +1,77 @@
+"""A solve() attempt's prioritised steps with a posture, until it settles, in one compiled call: for
+:class:`gsik.control.Controller` (a mixin).
+
+``Attempts._control_steps`` made two Python calls a step around the compiled step
+(:meth:`~gsik.control.Controller.step`, then :meth:`gsik.stall.PostureSettle.settled`); a drag's warm solve() makes
+two to ten steps a frame. :meth:`ControlSettle.steps_until_settled` runs them as one
+:func:`gsik.kernels.settle_steps.settle_steps` call and leaves the controller as those steps would have: the results
+are bit for bit the Python loop's (``tests/test_control_settle.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gsik.control_inputs import ControlStats
+from gsik.kernels import compiled_entry
+from gsik.kernels import settle_steps as sk
+
+_new_tuple = tuple.__new__  # a NamedTuple with every field given, without its __new__'s Python call
+
+
+class ControlSettle:
+    """:meth:`steps_until_settled` for :class:`~gsik.control.Controller`, which owns the state it works on."""
+
+    #: False: every attempt's steps through the Python loop (``Attempts._control_steps``, what this is tested
+    #: against).
+    compiled_settle = True
+
+    def steps_until_settled(self, q: np.ndarray, W: np.ndarray, R: np.ndarray, p: np.ndarray, lam: np.ndarray,
+                            iterations: int, posture) -> tuple[ControlStats, int] | None:
+        """``(the last step's ControlStats, steps made)``: up to ``iterations`` prioritised steps from ``q`` (n,)
+        [rad] at ``W`` (4, 4) (frames ``R``, ``p``; ``lam`` (1,) the adaptive damping), in place, until one holds
+        the pose or the posture settles (``posture``: a :class:`gsik.stall.PostureSettle`, whose gain and state
+        are adapted; a settling step counts as held). ``None``, with nothing changed, where the compiled loop does
+        not run them: balance, fixed damping, the Python reference (``compiled_step`` False), no numba, a held
+        pose, no step to make.
+
+        Raises:
+            numpy.linalg.LinAlgError: A priority level's Jacobian went non-finite (as :meth:`step` raises).
+        """
+        if not (sk.AVAILABLE and self.compiled_settle and self.compiled_step and self._settings.adaptive_damping) \
+                or self._balance is not None or self._held is not None or iterations < 1:
+            return None
+        call = self._settle_call(q, W, R, p, lam, iterations, posture)
+        n = q.shape[0]
+        if posture.last_move.shape != (n,):
+            posture.last_move = np.zeros(n)
+        code, steps, accepted, held, converged, cost, lagging, step_norm, committed, settled = call(
+            W, q, R, p, lam, iterations, bool(self._rest_damping), posture.state, posture.gain, posture.last_move)
+        self._first, self._rest_damping = None, False
+        if code != sk.STEPPED:
+            self._errors_left = False
+            if steps > 1:  # the steps before it held nothing
+                self._held, self._last_held = None, False
+            raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
+        self._errors_left = committed
+        stats = _new_tuple(ControlStats, (accepted, held, converged, cost, step_norm, lagging))
+        self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
+        self._last_held = held
+        return (stats._replace(held=True) if settled else stats), steps
+
+    def _settle_call(self, q, W, R, p, lam, iterations: int, posture):
+        """``call(W, q, R, p, lam, iterations, rest, state, gain, last_move)``: :func:`settle_steps`'s compiled
+        entry over this controller's :class:`~gsik.kernels.step_inputs.StepInputs` for its restoring steps, made
+        once (with its work arrays)."""
+        call = self._settle_calls.get(self._restoring)
+        if call is None:
+            _, inputs = self._step_calls.get(self._restoring) or self._make_step_call(W, q, R, p, lam, float(lam[0]))
+            move, before = np.empty_like(q), np.empty_like(q)
+            entry = compiled_entry(sk.settle_steps, inputs, W, q, R, p, lam, int(iterations), False, posture.state,
+                                   posture.gain, np.empty_like(q), move, before)
+
+            def call(W, q, R, p, lam, iterations, rest, state, gain, last_move):
+                return entry(inputs, W, q, R, p, lam, iterations, rest, state, gain, last_move, move, before)
+
+            self._settle_calls[self._restoring] = call
+        return call
