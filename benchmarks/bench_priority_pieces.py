@@ -10,8 +10,8 @@ the drag's start pose (``pins``: a diagonal factor). Printed, one run:
    loop (no dispatch), medians over the frames [µs]: the strict-priority kernel (pivoted QR every level) on its first
    1, 2 and all 3 packed levels (the last's cost is the difference; the pins' and hands' levels alone are what a
    restoring step solves), the step's kernel on all of them as the step calls it
-   (:func:`~gsik.kernels.posture_level.prioritized_step_posture`: a full posture by its normal equations; a diagonal
-   one, which the step solves by the pivoted QR, timed by its normal equations too, unbounded: what that would save),
+   (:func:`~gsik.kernels.posture_level.prioritized_step_posture`: a full or diagonal posture by its normal equations;
+   a diagonal one timed by the pivoted QR too, as the step solved it before: what the normal equations save),
    :func:`~gsik.kernels.control.linearise`, :func:`~gsik.kernels.control.trial` (forward kinematics and level state),
    and :func:`~gsik.kernels.control.step_trial` (the three, with the dampings and the box, as a step calls them).
 
@@ -95,10 +95,10 @@ def _pieces(solver, repeat: int) -> dict[str, float]:
     rows = c._posture_rows
     out["the step's kernel, all levels"] = _cpu_us(_posture_loop, repeat, *packed, tasks.starts, wk.dampings, wk.lo,
                                                     wk.hi, c._tols, rows.normal, rows.share[0], dq, wk.below)
-    if rows.normal.shape[0] == 0 and rows.factor.shape[0] > 0:  # a diagonal posture (pins): its normal equations
-        out["  the same, posture by normal eq."] = _cpu_us(
+    if rows.normal.shape[0] > 0 and not posture_level.is_full(rows.normal):  # a diagonal posture (pins): by the QR
+        out["  the same, posture by pivoted QR"] = _cpu_us(
             _posture_loop, repeat, *packed, tasks.starts, wk.dampings, wk.lo, wk.hi, c._tols,
-            np.ascontiguousarray(rows.factor.T @ rows.factor), 0.0, dq, wk.below)
+            np.zeros((0, q.shape[0])), 0.0, dq, wk.below)
     out["linearise"] = _cpu_us(_linearise_loop, repeat, c._task_model, tasks, c._posture_rows, q, R, p,
                                c._cache.e.copy(), wk)
     out["trial (FK + level state)"] = _cpu_us(_trial_loop, repeat, c._fk_model, tasks, c._posture_rows, c._root,

@@ -400,7 +400,7 @@ class Controller(ControlTargets, ControlSettle):
         on, rows = tolerance > 0.0 and self.settle_refusals, self._posture_rows
         self._cache.settle[0] = tolerance if on else 0.0
         self._restoring = SETTLE_RESTORING_STEPS if on else RESTORING_STEPS
-        rows.share[0] = ck.POSTURE_SHARE if tolerance <= 0.0 and rows.normal.shape[0] else 0.0
+        rows.share[0] = ck.share_of(rows.normal) if tolerance <= 0.0 else 0.0
 
     def share_bounded(self) -> bool:
         """True if the last step's posture share was scaled onto its bound (:func:`gsik.kernels.accept.share_bounded`):

@@ -1,5 +1,6 @@
-"""A full posture's level by its normal equations (gsik.kernels.posture_level): the pivoted QR kernel's step and the
-SVD reference's, through locked DOFs, rank-deficient and empty levels above; which factors take that path."""
+"""A full or diagonal posture's level by its normal equations (gsik.kernels.posture_level): the pivoted QR kernel's
+step and the SVD reference's, through locked DOFs, rank-deficient and empty levels above; which factors take that
+path."""
 
 import numpy as np
 from hypothesis import given, settings
@@ -17,6 +18,12 @@ def _full_factor(rng, n, condition=30.0):
     U, _ = np.linalg.qr(rng.normal(size=(n, n)))
     V, _ = np.linalg.qr(rng.normal(size=(n, n)))
     return U @ np.diag(np.geomspace(1.0, 1.0 / condition, n)) @ V.T
+
+
+def _diagonal_factor(rng, n, condition=30.0):
+    """A diagonal posture factor (n, n) with entries from 1 to ``1 / condition`` in random order (pins' or the
+    retargeter's per-DOF weights)."""
+    return posture_factor(rng.permutation(np.geomspace(1.0, 1.0 / condition, n)) ** 2)
 
 
 def _steps(levels, lo, hi, dampings, normal):
@@ -37,12 +44,13 @@ def _steps(levels, lo, hi, dampings, normal):
 @st.composite
 def posture_problems(draw):
     """``(levels, lo, hi, dampings, normal)``: up to 3 levels above (some empty, with a duplicated or a zero row, or
-    DOFs they do not move), a full well-conditioned posture below; boxes from roomy to tight enough that the posture's
+    DOFs they do not move), a full or diagonal well-conditioned posture below; boxes from roomy to tight enough that the posture's
     level locks DOFs, some DOFs resting on a bound."""
     n = draw(st.integers(2, 30))  # one DOF's factor is diagonal
     rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
     levels = [hard_level(draw, rng, m, n, 0.1) for m in draw(st.lists(st.integers(0, 8), min_size=0, max_size=3))]
-    factor = _full_factor(rng, n, draw(st.sampled_from([1.0, 30.0, 1e3])))
+    make = _diagonal_factor if draw(st.booleans()) else _full_factor
+    factor = make(rng, n, draw(st.sampled_from([1.0, 30.0, 1e3])))
     levels.append(factor_level(rng.normal(size=n) * 0.3, np.zeros(n), factor))
     width = draw(st.sampled_from([0.01, 0.1, 3.0]))
     lo, hi = -rng.uniform(0.0, width, size=n), rng.uniform(0.0, width, size=n)
@@ -107,12 +115,15 @@ def test_without_a_normal_matrix_the_step_is_the_pivoted_qr_kernel_s_bit_for_bit
     assert dq.tobytes() == qr.tobytes()
 
 
-def test_only_a_full_well_conditioned_square_factor_takes_the_normal_equations(rng):
+def test_only_a_well_conditioned_square_factor_takes_the_normal_equations(rng):
     n = 6
     full = _full_factor(rng, n)
     np.testing.assert_allclose(normal_matrix(full), full.T @ full, atol=1e-15)
     assert normal_matrix(full).flags.c_contiguous
-    assert normal_matrix(posture_factor(rng.uniform(0.5, 2.0, n))).shape == (0, n)  # diagonal: the sparse QR's
+    weights = rng.uniform(0.5, 2.0, n)
+    np.testing.assert_allclose(normal_matrix(posture_factor(weights)), np.diag(weights), rtol=1e-15)
+    weights[2] = 0.0  # a DOF the posture does not hold: rank-deficient, the pivoted QR's
+    assert normal_matrix(posture_factor(weights)).shape == (0, n)
     singular = full.copy()
     singular[-1] = 0.0
     assert normal_matrix(singular).shape == (0, n)
@@ -123,15 +134,19 @@ def test_only_a_full_well_conditioned_square_factor_takes_the_normal_equations(r
     assert normal_matrix(not_finite).shape == (0, n)
 
 
-def test_posture_rows_without_a_normal_matrix_keep_the_pivoted_qr(rng):
-    """Built from three fields (as before the normal matrix), or with a diagonal factor: an empty normal matrix."""
-    from gsik.kernels.control import PostureRows, posture_rows
+def test_posture_rows_keep_the_pivoted_qr_without_a_normal_matrix_and_bound_only_a_full_factor(rng):
+    """Built from three fields (as before the normal matrix): an empty normal matrix; a diagonal factor's normal
+    matrix is diagonal, its share not bounded; a full one's bounded."""
+    from gsik.kernels.control import POSTURE_SHARE, PostureRows, posture_rows
 
     n = 5
     assert PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1)).normal.shape[0] == 0
     assert posture_rows(None, np.zeros((0, n))).normal.shape == (0, n)
-    assert posture_rows(np.zeros(n), posture_factor(np.ones(n))).normal.shape == (0, n)
+    diagonal = posture_rows(np.zeros(n), posture_factor(np.full(n, 2.0)))
+    np.testing.assert_allclose(diagonal.normal, 2.0 * np.eye(n), rtol=1e-15, atol=0.0)
+    assert diagonal.share[0] == 0.0
     full = _full_factor(rng, n)
     rows = posture_rows(np.ones(n), full)
     np.testing.assert_array_equal(rows.factor, full)
     np.testing.assert_allclose(rows.normal, full.T @ full, atol=1e-15)
+    assert rows.share[0] == POSTURE_SHARE > 0.0

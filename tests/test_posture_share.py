@@ -91,7 +91,7 @@ def test_a_bounded_share_leaves_the_target_levels_linearised_errors_alone(rng):
 
 def test_the_controller_bounds_a_full_posture_factor_only(rng, monkeypatch):
     """The learned prior's full factor gets the bound (on by default); a diagonal posture (pins, the retargeter)
-    none, so its steps and the bundled priors built with it stay bit for bit; no posture, none."""
+    none, so its steps take their whole share (the bundled priors are built with it); no posture, none."""
     n = 12
     assert posture_rows(np.zeros(n), _full_factor(rng, n)).share[0] == POSTURE_SHARE > 0.0
     monkeypatch.setattr(control_kernels, "POSTURE_SHARE", 0.05)

@@ -33,7 +33,7 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
-from gsik.kernels.posture_level import POSTURE_SHARE, normal_matrix, prioritized_step_posture
+from gsik.kernels.posture_level import POSTURE_SHARE, is_full, normal_matrix, prioritized_step_posture
 
 # Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
 # convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0); the full
@@ -77,7 +77,7 @@ class PostureRows(NamedTuple):
         reference: (n_dofs,) the preferred angles [rad].
         factor: (k, n_dofs) ``L`` with ``P = L^T L`` (k = 0: no posture).
         gain: (1,) the share of the posture's Gauss-Newton step a step takes (its errors' scale; 1: all of it).
-        normal: (n_dofs, n_dofs) ``P`` where the step solves the level by its normal equations (a full,
+        normal: (n_dofs, n_dofs) ``P`` where the step solves the level by its normal equations (a square,
             well-conditioned factor: :func:`gsik.kernels.posture_level.normal_matrix`), else empty (default:
             the pivoted QR's level).
         share: (1,) the bound [rad] on the posture level's share of a step where ``normal`` is given
@@ -93,16 +93,22 @@ class PostureRows(NamedTuple):
 
 def posture_rows(reference: np.ndarray | None, factor: np.ndarray) -> PostureRows:
     """The :class:`PostureRows` of a posture at ``reference`` (n,) [rad] with the factor ``factor`` (k, n) of its
-    precision (``None`` and (0, n): no posture); gain 1; a full factor's (the learned prior's, solved by its normal
-    equations) share of a step bounded by :data:`gsik.kernels.posture_level.POSTURE_SHARE`, a diagonal one's not
-    (the retargeter's and the bundled priors' results stay bit for bit)."""
+    precision (``None`` and (0, n): no posture); gain 1; a well-conditioned factor's level solved by its normal
+    equations (:func:`gsik.kernels.posture_level.normal_matrix`: the learned prior's, a diagonal one's), the share of
+    a step of a full factor's (the learned prior's) bounded by :data:`gsik.kernels.posture_level.POSTURE_SHARE`, a
+    diagonal one's not (:func:`share_of`)."""
     n = factor.shape[1]
     if reference is None:
         return PostureRows(np.zeros(n), np.zeros((0, n)), np.ones(1), np.zeros((0, n)), np.zeros(1))
     factor = np.ascontiguousarray(factor, dtype=float)
     normal = normal_matrix(factor)
-    share = np.array([POSTURE_SHARE if normal.shape[0] > 0 else 0.0])
-    return PostureRows(np.array(reference, dtype=float), factor, np.ones(1), normal, share)
+    return PostureRows(np.array(reference, dtype=float), factor, np.ones(1), normal, np.array([share_of(normal)]))
+
+
+def share_of(normal: np.ndarray) -> float:
+    """The bound [rad] on the posture's share of a step with this :attr:`PostureRows.normal`: :data:`POSTURE_SHARE`
+    for a full factor's (:func:`gsik.kernels.posture_level.is_full`), else 0 (none)."""
+    return POSTURE_SHARE if is_full(normal) else 0.0
 
 
 class ControlWork(NamedTuple):

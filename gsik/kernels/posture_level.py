@@ -1,4 +1,4 @@
-"""The posture level of the strict-priority step by its normal equations: a full posture factor at a fraction of the
+"""The posture level of the strict-priority step by its normal equations: a square posture factor at a fraction of the
 pivoted QR's cost.
 
 The posture is the last level, ``|L (q + dq - reference)|^2`` with a factor ``L`` (n, n) fixed for a controller
@@ -63,13 +63,13 @@ POSTURE_SHARE = 0.07
 def normal_matrix(factor: np.ndarray) -> np.ndarray:
     """``P = L^T L`` (n, n) of a posture factor ``L`` (k, n) whose level :func:`prioritized_step_posture` solves by
     its normal equations: a square, finite, well-conditioned one (:data:`WELL_CONDITIONED`, one Cholesky test, no
-    decomposition: a conditioned prior sets a posture a frame) that is not diagonal; else (0, n): the pivoted QR's
-    level (a diagonal factor's runs over one column per DOF, about as cheap; a rank-deficient one needs the QR's
-    rank)."""
+    decomposition: a conditioned prior sets a posture a frame), full (the learned prior) or diagonal (pins' start
+    pose, the retargeter's rest: ``Z^T P`` is then one scaling, :func:`_basis_scaled`; on bench_drag's pins the level
+    took ~15 µs by the pivoted QR); else (0, n): the pivoted QR's level (a rank-deficient one needs the QR's rank)."""
     L = np.asarray(factor, dtype=float)
     n = L.shape[1]
     none = np.zeros((0, n))
-    if L.shape[0] != n or n == 0 or not np.all(np.isfinite(L)) or not np.any(L - np.diag(np.diag(L))):
+    if L.shape[0] != n or n == 0 or not np.all(np.isfinite(L)):
         return none
     P = np.ascontiguousarray(L.T @ L)
     try:
@@ -77,6 +77,12 @@ def normal_matrix(factor: np.ndarray) -> np.ndarray:
     except np.linalg.LinAlgError:
         return none
     return P
+
+
+def is_full(normal: np.ndarray) -> bool:
+    """True if a :func:`normal_matrix` ``normal`` (n, n) is given and not diagonal: a learned prior's, whose share of a
+    step is bounded (:data:`POSTURE_SHARE`); a diagonal posture's (pins, the retargeter) never is."""
+    return normal.shape[0] > 0 and np.count_nonzero(normal) > np.count_nonzero(np.diagonal(normal))
 
 
 @njit(cache=True, _nrt=True)
@@ -144,7 +150,10 @@ def _posture_level(wk, rows, errors, start, stop, P, z0, rz, dq, lo, hi, damping
     for i in range(start, stop):
         if errors[i] != 0.0:
             axpy1(g, errors[i], rows, i, 0, n)
-    _basis_times(wk.Zt, z0, rz, P, ZP)
+    if _diagonal(P):
+        _basis_scaled(wk.Zt, z0, rz, P, ZP)
+    else:
+        _basis_times(wk.Zt, z0, rz, P, ZP)
     _gram(ZP, wk.Zt, z0, rz, N)
     while True:
         priority._into_box(dq, lo, hi, box_tol)
@@ -210,6 +219,29 @@ def _basis_times(Zt, z0, rz, P, ZP):
                 row = P[d]
                 for j in range(n):
                     a[j] += zc * row[j]
+
+
+@njit(cache=True, _nrt=False)
+def _diagonal(P):
+    """True if ``P`` (n, n) is zero off its diagonal (a full one says so at its first nonzero off it)."""
+    n = P.shape[0]
+    for d in range(n):
+        row = P[d]
+        for j in range(n):
+            if j != d and row[j] != 0.0:
+                return False
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def _basis_scaled(Zt, z0, rz, P, ZP):
+    """:func:`_basis_times` for a diagonal ``P``: ``ZP[c, j] = Zt[z0 + c, j] P[j, j]``, the same numbers (the other
+    terms of its sums are zeros)."""
+    n = P.shape[0]
+    for c in range(rz):
+        a, z = ZP[c, :n], Zt[z0 + c]
+        for j in range(n):
+            a[j] = z[j] * P[j, j]
 
 
 @njit(cache=True, _nrt=False)
