@@ -99,7 +99,7 @@ CASES = [("hands at 0", 16, (0.0, 0.0, 0.0), True, [("targets alone", True), ("t
                                                    ("halved", 3, "worse")]),
          ("pins", 16, (0.0, 0.0, 0.0), True, [("targets alone", True), ("targets alone", False),
                                              ("halved", 1, "better"), ("halved", 0, "worse")]),
-         ("pins", 24, (0.0, 0.0, 0.0), False, [("halved", 3, "same")]),
+         ("hands at 0", 24, (0.0, 0.1, 0.0), False, [("halved", 3, "same")]),
          ("studio", 30, (0.0, 0.0, 0.0), True, [("targets alone", True), ("targets alone", False),
                                                ("halved", 1, "better"), ("halved", 2, "better"),
                                                ("halved", 0, "same")]),

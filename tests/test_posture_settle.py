@@ -66,12 +66,16 @@ def test_a_contraction_too_slow_or_estimated_above_the_tolerance_goes_on():
     assert _warm_steps(BIG, NEXT, carried=0.8) == [False, False]  # the last attempt ended on a slow mode
 
 
-def test_a_halved_or_refused_step_estimates_nothing():
+def test_a_halved_or_refused_step_estimates_nothing_and_the_next_reads_its_ratio_to_the_last_whole_one():
     settle = PostureSettle(1e-3, True, np.array([1.0]), 0.0)
     assert not settle.settled(BIG, BIG, True)
     assert not settle.settled(NEXT * 2.0, NEXT * 0.4, True)  # halved twice: 8e-3 full, no ratio to BIG
-    assert not settle.settled(NEXT, NEXT, True)  # its ratio to a step not taken whole is unknown
     assert settle.contraction == pytest.approx(0.0)
+    assert not settle.settled(NEXT * 2.0, np.zeros(3), True)  # refused
+    assert not settle.settled(NEXT * 2.0, NEXT * 0.01, True)  # the targets' levels alone
+    assert settle.contraction == pytest.approx(0.0)
+    assert settle.settled(NEXT, NEXT, True)  # taken whole: a tenth of BIG, the last whole one
+    assert settle.contraction == pytest.approx(0.1)
 
 
 MOVE = np.array([3e-2, -1e-2, 2e-2])  # a posture move [rad], far above the tolerance

@@ -23,7 +23,7 @@ CONTRACTION = 0.5
 
 #: Where :func:`settled`'s state (:data:`STATE_SIZE`,) holds: the settle tolerance [rad]; every target within its
 #: tolerances after the last step (1/0); a warm attempt (1/0); the contraction carried from the last attempt; the
-#: last one measured; the last step's largest DOF [rad] if it was taken whole, else 0; the last move is a posture
+#: last one measured; the largest DOF [rad] of the last step taken whole (0 before one); the last move is a posture
 #: move kept for the next secant (1/0).
 TOLERANCE, CONVERGED, WARM, CARRIED, CONTRACTION_NOW, LAST_FULL, HAS_MOVE = range(7)
 STATE_SIZE = 7
@@ -95,9 +95,10 @@ def settled(state, gain, step, moved, last_move, converged: bool) -> bool:
     full, most = _largest(step), _largest(moved)
     whole = full > 0.0 and most >= 0.5 * full  # not halved twice, nor refused
     last = state[LAST_FULL]
-    state[LAST_FULL] = full if whole else 0.0
-    if whole and last > 0.0:
-        state[CONTRACTION_NOW] = full / last
+    if whole:  # a step not taken whole (halved, refused, the targets' levels alone) keeps the last whole one
+        state[LAST_FULL] = full
+        if last > 0.0:
+            state[CONTRACTION_NOW] = full / last
     warm = state[WARM] > 0.0
     if not within:
         state[HAS_MOVE] = 0.0
