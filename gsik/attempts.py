@@ -75,24 +75,26 @@ class AttemptPolicy:
             self.set_targets(targets)
         if q0 is not None:
             self.set_q(q0)
-        self._make_moved_targets()  # before a continuation stages other values in the packed rows
+        if self._moved:
+            self._make_moved_targets()  # before a continuation stages other values in the packed rows
         if self._is_controlled and not self._balance:
             self._make_controller(rows=True)  # the rows hold the targets' values now: gathered, as a step's
         self._stepped = False
         if self._settled is not None and self._settled[0] == self._reach_key():
-            return self._solve_result(self._settled[1], 1)  # nothing further can do better: no work
+            return self._solve_result(self._settled[1], 1, _status(self._settled[1]))  # nothing can do better: no work
         first = None
         if not self._is_controlled:
             first = self._plain_first_attempt()
             if type(first) is SolveResult:
                 return first
         stats, attempts = self._attempts(first)
-        self._ws.x[:] = 0.0
+        self._ws.x.fill(0.0)
         self._ws.lam[0] = self._settings.damping
-        self._remember_settled(stats)
+        status = _status(stats)
+        self._remember_settled(stats, status)
         # What the next solve may start from warm: this one's pose under this posture, if it converged.
-        self._warm = (self._q.tobytes(), self._posture) if _status(stats) is Status.CONVERGED else None
-        return self._solve_result(stats, attempts)
+        self._warm = (self._q.tobytes(), self._posture) if status is Status.CONVERGED else None
+        return self._solve_result(stats, attempts, status)
 
     def _refuse_non_finite(self, before: np.ndarray | None, stats: np.ndarray) -> None:
         """Undo a step or attempt that left a non-finite angle or error (``stats[O_FINITE]`` 0; status
@@ -114,11 +116,12 @@ class AttemptPolicy:
         stats[O_COST] = stats[O_RESIDUAL] = np.inf
         stats[O_STEP_NORM] = 0.0
 
-    def _solve_result(self, stats: np.ndarray, attempts: int) -> SolveResult:
-        """The result of a solve whose best attempt's statistics are ``stats``."""
+    def _solve_result(self, stats: np.ndarray, attempts: int, status: Status) -> SolveResult:
+        """The result of a solve whose best attempt's statistics are ``stats`` (its ``status``: :func:`_status`)."""
         if self._is_controlled:  # _stepped: the pose is where the last attempt's last step left it (its errors hold)
-            return self._control_result(_status(stats), int(stats[O_ITERATIONS]), float(stats[O_COST]),
-                                        float(stats[O_STEP_NORM]), attempts, self._control_report(self._stepped))
+            values = stats.tolist()  # Python floats: cheaper to read than NumPy scalars
+            return self._control_result(status, int(values[O_ITERATIONS]), values[O_COST], values[O_STEP_NORM],
+                                        attempts, self._control_report(self._stepped))
         return self._result(stats, O_COST, attempts)
 
     def _plain_first_attempt(self) -> SolveResult | tuple[np.ndarray, np.ndarray]:
@@ -170,10 +173,11 @@ class AttemptPolicy:
         warm = self._warm
         return warm is not None and warm[1] is self._posture and warm[0] == start.tobytes()
 
-    def _remember_settled(self, stats: np.ndarray) -> None:
-        """Keep a best reach (a stalled solve) so that the same solve again from it does no work."""
+    def _remember_settled(self, stats: np.ndarray, status: Status) -> None:
+        """Keep a best reach (a stalled solve, ``status`` that of ``stats``) so that the same solve again from it does
+        no work."""
         self._settled = None
-        if _status(stats) is Status.STALLED:
+        if status is Status.STALLED:
             settled = stats.copy()
             settled[O_ITERATIONS] = settled[O_SWEEPS] = 0
             self._settled = (self._reach_key(), settled)
@@ -361,7 +365,7 @@ class AttemptPolicy:
         self._stepped = st is not None  # nothing moves the pose after this attempt's last step (see _solve_result)
         it += first
         stats = np.zeros(kernels.N_STATS)
-        stats[O_STATUS] = self._control_status(c, st)
+        stats[O_STATUS] = self._control_status(c, st).value  # an int: NumPy probes an enum's array protocols
         stats[O_ITERATIONS] = it if iterations else 0
         stats[O_COST] = c.target_cost(self._ws.R, self._ws.p)
         stats[O_STEP_NORM] = 0.0 if st is None else st.step_norm
@@ -376,9 +380,9 @@ class AttemptPolicy:
         are the ones :meth:`~gsik.control.Controller.converged` reads, so the posture's settle test reuses them."""
         if not (self._stages_positions() and iterations):
             return 0, None
-        pos, ori = c.error_lists(self._ws.R, self._ws.p)  # a few tasks: plain floats are cheaper
-        if all(e <= solve_kernels.STAGE_ANGLE for e in ori):  # as ori.max() <= STAGE_ANGLE, a NaN included
-            return 0, c.within_tolerances(pos, ori)  # Controller.converged's test, on these errors
+        staged, within = c.target_state(self._ws.R, self._ws.p, solve_kernels.STAGE_ANGLE)  # one compiled call
+        if staged:  # every orientation error within STAGE_ANGLE (a NaN is not)
+            return 0, within  # Controller.converged's test, on these errors
         tasks = control.frame_tasks(self._skeleton, self._targets, self._settings.orientation_weight)
         c.retarget([t._replace(row_weight=t.row_weight * _POSITION_ROWS) for t in tasks])
         try:

@@ -20,6 +20,7 @@ from gsik.kernels import accept as ak
 from gsik.kernels import control as ck
 from gsik.kernels import gather
 from gsik.kernels import kinematics as kernels
+from gsik.kernels import target_state as ts
 
 
 class ControlReport(NamedTuple):
@@ -112,11 +113,6 @@ class ControlTargets:
         err = self._used_errors(R, p)
         return err[0], err[1]
 
-    def error_lists(self, R: np.ndarray, p: np.ndarray) -> tuple[list[float], list[float]]:
-        """:meth:`errors` as two lists of plain floats (what a test of a few tasks reads fastest)."""
-        pos, ori = self._used_errors(R, p).tolist()
-        return pos, ori
-
     def _used_errors(self, R: np.ndarray, p: np.ndarray) -> np.ndarray:
         """(2, m) :meth:`errors`, a new array."""
         self._task_errors(R, p)
@@ -159,23 +155,29 @@ class ControlTargets:
                    self._e, self._err, self._M)
 
     def target_cost(self, R, p) -> float:
-        """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``."""
-        self._task_errors(R, p)
+        """Weighted squared error ``0.5 e^T W e`` of every target at frames ``R``, ``p``: one compiled call
+        (:func:`gsik.kernels.target_state.target_cost`), NumPy's ``0.5 * float((e * e * row_w).sum())`` bit for bit."""
+        tasks = self._tasks_in
+        if self._e.shape[0] <= ts.MAX_TERMS:
+            return self._call(ts.target_cost, R, p, tasks.frame, self._tp, self._tR, tasks.row_weight, self._e,
+                              self._err, self._M)
+        self._task_errors(R, p)  # more tasks than the compiled sum takes (40): NumPy's own
         e = self._e.reshape(-1, 6)
         squares = e * e  # as ``e ** 2``, then in place: the same values and sum, bit for bit, without two arrays
         squares *= self._row_w
         return 0.5 * float(squares.sum())
 
+    def target_state(self, R, p, stage_angle: float) -> tuple[bool, bool]:
+        """``(every orientation error within stage_angle [rad], every target within the position and orientation
+        tolerances)`` at frames ``R``, ``p`` (a row a task does not use counts 0, a NaN error is within nothing): one
+        compiled call (:func:`gsik.kernels.target_state.target_state`)."""
+        tasks, s = self._tasks_in, self._settings
+        return self._call(ts.target_state, R, p, tasks.frame, self._tp, self._tR, tasks.row_weight, self._e, self._err,
+                          self._M, float(stage_angle), float(s.position_tolerance), float(s.orientation_tolerance))
+
     def converged(self, R, p) -> bool:
         """True if every target is within the position and orientation tolerances."""
-        return self.within_tolerances(*self.error_lists(R, p))
-
-    def within_tolerances(self, pos: list[float], ori: list[float]) -> bool:
-        """True if every position error [m] in ``pos`` and orientation error [rad] in ``ori`` is within the
-        settings' tolerances (a NaN is not)."""
-        s = self._settings
-        return all(e <= s.position_tolerance for e in pos) and all(e <= s.orientation_tolerance for e in ori)
-
+        return self.target_state(R, p, math.inf)[1]
 
 def _same(a: np.ndarray, b: np.ndarray | None) -> bool:
     """True if ``b`` holds the very values of ``a`` (bit for bit: a cheaper test than ``np.array_equal``)."""
