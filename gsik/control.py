@@ -112,6 +112,7 @@ class Controller(ControlTargets, ControlSettle):
         self._posture_rows = ck.posture_rows(None, np.zeros((0, n))) if posture is None else \
             ck.posture_rows(posture.reference, posture_factor(posture.precision))
         self.posture_gain = self._posture_rows.gain  # (1,) the share of the posture's step taken: 1 but in solve()
+        self._share_bound = float(self._posture_rows.share[0])  # bound on the posture's share of a step [rad]
         self._lower, self._upper = np.array(skeleton.lower, dtype=float), np.array(skeleton.upper, dtype=float)
         self._tols = (RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE)
         self._balance = balance
@@ -400,12 +401,7 @@ class Controller(ControlTargets, ControlSettle):
         on, rows = tolerance > 0.0 and self.settle_refusals, self._posture_rows
         self._cache.settle[0] = tolerance if on else 0.0
         self._restoring = SETTLE_RESTORING_STEPS if on else RESTORING_STEPS
-        rows.share[0] = ck.share_of(rows.normal) if tolerance <= 0.0 else 0.0
-
-    def share_bounded(self) -> bool:
-        """True if the last step's posture share was scaled onto its bound (:func:`gsik.kernels.accept.share_bounded`):
-        the posture has further to go than one step takes, so a pose with every target met has not settled yet."""
-        return self._work.out[ck.O_SHARE] > self._posture_rows.share[0]
+        rows.share[0] = self._share_bound if tolerance <= 0.0 else 0.0
 
     def _settles(self, state0: LevelState, dq: np.ndarray) -> bool:
         """True if the full step ``dq`` (n,) [rad] from the start state ``state0`` settles the posture

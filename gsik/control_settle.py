@@ -14,6 +14,7 @@ import numpy as np
 
 from gsik.control_inputs import ControlStats
 from gsik.kernels import compiled_entry
+from gsik.kernels import control as ck
 from gsik.kernels import settle_steps as sk
 
 _new_tuple = tuple.__new__  # a NamedTuple with every field given, without its __new__'s Python call
@@ -58,6 +59,11 @@ class ControlSettle:
         self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
         self._last_held = held
         return (stats._replace(held=True) if settled else stats), steps
+
+    def share_bounded(self) -> bool:
+        """True if the last step's posture share was scaled onto its bound (:func:`gsik.kernels.accept.share_bounded`):
+        the posture has further to go than one step takes, so a pose with every target met has not settled yet."""
+        return self._work.out[ck.O_SHARE] > self._posture_rows.share[0]
 
     def _settle_call(self, q, W, R, p, lam, iterations: int, posture):
         """``call(W, q, R, p, lam, iterations, rest, state, gain, last_move)``: :func:`settle_steps`'s compiled
