@@ -189,7 +189,6 @@ class Controller(ControlTargets, ControlSettle):
         self._step_calls = {}  # restoring steps: (compiled entry, StepInputs), made at the first such compiled step
         self._settle_calls = {}  # restoring steps: steps_until_settled's compiled call, made at its first
 
-
     def _call(self, kernel, *args):
         """``kernel(*args)`` through its compiled entry point (made once for these argument types)."""
         entry = self._entries.get(kernel)

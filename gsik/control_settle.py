@@ -43,11 +43,9 @@ class ControlSettle:
                 or self._balance is not None or self._held is not None or iterations < 1:
             return None
         call = self._settle_call(q, W, R, p, lam, iterations, posture)
-        n = q.shape[0]
-        if posture.last_move.shape != (n,):
-            posture.last_move = np.zeros(n)
         code, steps, accepted, held, converged, cost, lagging, step_norm, committed, settled = call(
-            W, q, R, p, lam, iterations, bool(self._rest_damping), posture.state, posture.gain, posture.last_move)
+            W, q, R, p, lam, iterations, bool(self._rest_damping), posture.state, posture.gain,
+            posture.move_buffer(q.shape[0]))
         self._first, self._rest_damping = None, False
         if code != sk.STEPPED:
             self._errors_left = False

@@ -179,6 +179,7 @@ class ControlTargets:
         """True if every target is within the position and orientation tolerances."""
         return self.target_state(R, p, math.inf)[1]
 
+
 def _same(a: np.ndarray, b: np.ndarray | None) -> bool:
     """True if ``b`` holds the very values of ``a`` (bit for bit: a cheaper test than ``np.array_equal``)."""
     return a is b or (b is not None and a.shape == b.shape and a.tobytes() == b.tobytes())

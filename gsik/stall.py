@@ -115,10 +115,12 @@ class PostureSettle:
 
     def __init__(self, tolerance: float, converged: bool, gain: np.ndarray, contraction: float | None = None):
         self.gain = gain
-        #: (STATE_SIZE,) the test's state (gsik.kernels.settle.TOLERANCE ...), read and written by settled()
-        carried = contraction or 0.0
-        self.state = np.array([tolerance, converged, contraction is not None, carried, carried, 0.0, 0.0])
-        self.last_move = np.zeros(0)  # the last posture move (n_dofs,) [rad], sized at the first step
+        #: (STATE_SIZE,) the test's state, read and written by :func:`gsik.kernels.settle.settled`
+        self.state = state = np.zeros(settle.STATE_SIZE)
+        state[settle.TOLERANCE], state[settle.CONVERGED] = tolerance, converged
+        state[settle.WARM] = contraction is not None
+        state[settle.CARRIED] = state[settle.CONTRACTION_NOW] = contraction or 0.0
+        self._last_move = np.zeros(0)  # the last posture move (n_dofs,) [rad]: move_buffer(n)
 
     @property
     def contraction(self) -> float:
@@ -135,6 +137,11 @@ class PostureSettle:
             moved: (n_dofs,) the change of the angles the step made [rad] (0 if refused).
             converged: Every target is within its tolerances after the step.
         """
-        if self.last_move.shape != moved.shape:
-            self.last_move = np.zeros(moved.shape)
-        return settle.settled(self.state, self.gain, step, moved, self.last_move, converged)
+        return settle.settled(self.state, self.gain, step, moved, self.move_buffer(moved.shape[0]), converged)
+
+    def move_buffer(self, n: int) -> np.ndarray:
+        """(n,) where :func:`gsik.kernels.settle.settled` keeps the last posture move [rad] (made at the first
+        step)."""
+        if self._last_move.shape[0] != n:
+            self._last_move = np.zeros(n)
+        return self._last_move

@@ -82,7 +82,7 @@ def normal_matrix(factor: np.ndarray) -> np.ndarray:
 def is_full(normal: np.ndarray) -> bool:
     """True if a :func:`normal_matrix` ``normal`` (n, n) is given and not diagonal: a learned prior's, whose share of a
     step is bounded (:data:`POSTURE_SHARE`); a diagonal posture's (pins, the retargeter) never is."""
-    return normal.shape[0] > 0 and np.count_nonzero(normal) > np.count_nonzero(np.diagonal(normal))
+    return normal.shape[0] > 0 and not _diagonal(normal)  # the step's own test
 
 
 @njit(cache=True, _nrt=True)
