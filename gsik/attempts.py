@@ -398,18 +398,24 @@ class AttemptPolicy:
         posture = self._posture_settle(c, converged)
         st = None
         it = 0
+        q, W, R, p, step = self._q, self._W, self._ws.R, self._ws.p, c.step  # read once, not per step
         if posture is not None:
             c.settle_steps(self._settings.posture_tolerance)  # a worse step that settles it is not retried
-        q, W, R, p, step = self._q, self._W, self._ws.R, self._ws.p, c.step  # read once, not per step
         settled, first_step = (None, None) if posture is None else (posture.settled, c.first_step)
         try:
-            done = None if posture is None else c.steps_until_settled(q, W, R, p, lam, iterations, posture)
+            # A warm solve goes on with the targets' curvature the last one learnt (gsik.kernels.curvature).
+            done = None if posture is None else c.steps_until_settled(q, W, R, p, lam, iterations, posture,
+                                                                      self._warm_attempt)
             if done is not None:  # the loop below in one compiled call
                 st, it = done
                 return st, it
+            if posture is not None:
+                c.curvature_begin(q, R, p, self._warm_attempt)
             for it in range(1, iterations + 1):
                 before = q.copy() if settled is not None else None
                 st = step(q, W, R, p, lam)
+                if settled is not None:
+                    c.curvature_learn(q, R, p)
                 if st.held or (st.converged and not settles):
                     break
                 if settled is not None and settled(first_step(), q - before, st.converged):
@@ -420,6 +426,7 @@ class AttemptPolicy:
                 self._posture_gain = (c, self._q.tobytes(), float(c.posture_gain[0]), posture.contraction)
                 c.posture_gain[0] = 1.0
                 c.settle_steps(0.0)
+                c.curvature_end()
         return st, it
 
     def _posture_settle(self, c, converged: bool | None = None) -> PostureSettle | None:

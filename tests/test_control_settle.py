@@ -18,10 +18,13 @@ pytestmark = pytest.mark.skipif(not settle_steps.AVAILABLE, reason="the compiled
 def _state(solver) -> tuple:
     """What a solve leaves for the next: the controller's held pose, whether its last step held, whether its errors
     are those its last step left, whether it restarts from the base damping; the posture gain and contraction the
-    attempt learnt (``Attempts._posture_gain``, its controller left out: each drag makes its own)."""
+    attempt learnt (``Attempts._posture_gain``, its controller left out: each drag makes its own); the targets'
+    curvature it learnt and the posture's matrix its level holds (gsik/kernels/curvature.py)."""
     c = solver._last_controller
     held = None if c._held is None else (c._held[0].tobytes(), c._held[1].tobytes(), c._held[2], c._held[3])
-    return held, c._last_held, c._errors_left, c._rest_damping, solver._posture_gain[1:], c.posture_gain.tobytes()
+    learnt = None if c._curvature is None else (c._curvature.B.tobytes(), c._curvature.state.tobytes())
+    return held, c._last_held, c._errors_left, c._rest_damping, solver._posture_gain[1:], c.posture_gain.tobytes(), \
+        learnt, c._posture_rows.normal.tobytes()
 
 
 def _drag(monkeypatch, compiled: bool, studio: bool) -> tuple[list, int]:

@@ -214,7 +214,10 @@ def _studio_drag(biped, frames: int, **settings) -> tuple[list, gsik.Solver, lis
     return results, solver, gains
 
 
-def test_swinging_posture_steps_are_shortened_and_a_step_still_takes_the_whole_posture_step(biped):
+def test_swinging_posture_steps_are_shortened_and_a_step_still_takes_the_whole_posture_step(biped, monkeypatch):
+    # Gauss-Newton posture steps swing near straight arms; the targets' curvature learnt takes the swing out
+    # (tests/test_settle_curvature.py), so the share is watched without it.
+    monkeypatch.setattr(gsik.control.Controller, "learns_curvature", False)
     on, solver, gains = _studio_drag(biped, 30)
     off, _, _ = _studio_drag(biped, 30, posture_tolerance=0.0)
     assert all(r.status is gsik.Status.CONVERGED for r in on + off)

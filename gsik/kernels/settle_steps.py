@@ -12,7 +12,7 @@ controller's held-pose bookkeeping.
 from __future__ import annotations
 
 from gsik._jit import njit
-from gsik.kernels import priority, step_inputs
+from gsik.kernels import curvature, priority, step_inputs
 from gsik.kernels.settle import settled
 
 #: :func:`settle_steps`'s first result: the steps ran (the rest of the tuple holds), or a level's Jacobian went
@@ -24,12 +24,15 @@ AVAILABLE = step_inputs.AVAILABLE
 
 
 @njit(cache=True)
-def settle_steps(s, W, q, R, p, lam, iterations, rest, state, gain, last_move, move, before):
+def settle_steps(s, W, q, R, p, lam, iterations, rest, state, gain, last_move, move, before, cur, learning, carry):
     """Up to ``iterations`` prioritised steps of a controller with a posture (``s``: its
     :class:`~gsik.kernels.step_inputs.StepInputs`) from ``q`` (n,) [rad] at ``W`` (4, 4), in place on ``q``, ``R``,
     ``p`` and ``lam`` (1,), until one holds the pose or settles the posture (:func:`gsik.kernels.settle.settled` on
     ``state``, ``gain`` (1,) and ``last_move`` (n,); ``move`` and ``before`` (n,) are work arrays). ``rest``: the
-    first step restarts from the base damping.
+    first step restarts from the base damping. ``learning``: the curvature ``cur`` is swapped into the posture's level
+    (``s.posture.normal``) from the start (:func:`gsik.kernels.curvature.begin`, ``carry``: from what the last
+    settle learnt), each step updates it (:func:`~gsik.kernels.curvature.learn`), and the posture's own is back
+    at the end (:func:`~gsik.kernels.curvature.end`).
 
     Returns ``(code, steps, accepted, held, converged, cost, lagging, step_norm, committed, settled)`` of the last
     step (``code`` :data:`STEPPED` or :data:`NOT_FINITE`): ``held`` as the controller judged it (the pose it holds
@@ -39,6 +42,8 @@ def settle_steps(s, W, q, R, p, lam, iterations, rest, state, gain, last_move, m
     cost = step_norm = 0.0
     steps = 0
     n = q.shape[0]
+    if learning:
+        curvature.begin(cur, s.posture.normal, carry, s.task_model, q, R, p)
     for steps in range(1, iterations + 1):
         for d in range(n):
             before[d] = q[d]
@@ -46,10 +51,13 @@ def settle_steps(s, W, q, R, p, lam, iterations, rest, state, gain, last_move, m
             lam[0], rest = s.base, False
         end = step_inputs.control_step(s, W, q, R, p, lam, lam[0])
         if end[0] != priority.OK:
+            curvature.end(cur, s.posture.normal)
             return NOT_FINITE, steps, False, False, False, 0.0, False, 0.0, False, False
         committed = end[1] > 0.0
         converged, cost, lagging = end[3] > 0.0, end[4], end[5] > 0.0
         accepted, held, step_norm = step_inputs.judged(s, end, True)  # a posture is on
+        if learning:
+            curvature.learn(cur, s.task_model, s.tasks.packed_row, s.posture.reference, q, R, p, s.posture.normal)
         if held:
             break
         for d in range(n):
@@ -57,4 +65,5 @@ def settle_steps(s, W, q, R, p, lam, iterations, rest, state, gain, last_move, m
         if settled(state, gain, s.cache.dq0, move, last_move, converged):
             done = True
             break
+    curvature.end(cur, s.posture.normal)
     return STEPPED, steps, accepted, held, converged, cost, lagging, step_norm, committed, done
