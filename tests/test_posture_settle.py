@@ -224,3 +224,30 @@ def test_swinging_posture_steps_are_shortened_and_a_step_still_takes_the_whole_p
     assert sum(r.iterations for r in on) < sum(r.iterations for r in off)
     assert min(gains) < 0.5  # the swing measured: less than half the posture's step, kept for the next solve ...
     assert solver._make_controller().posture_gain[0] == 1.0  # ... but not for a step()
+
+
+def test_a_warm_solve_settles_from_where_the_last_converged_without_the_single_level_reach(biped, monkeypatch):
+    """With the hands at priority 0 (one level of targets, the posture below) a cold attempt meets the targets on
+    the single level first; a warm solve's attempt starts where the last solve converged and settles from there,
+    and still meets targets that jumped far in one frame."""
+    reached = []
+    reach = gsik.attempts.AttemptPolicy._reach_then_settle
+    monkeypatch.setattr(gsik.attempts.AttemptPolicy, "_reach_then_settle",
+                        lambda self, *a: reached.append(self._warm_attempt) or reach(self, *a))
+    solver = gsik.Solver(biped)
+    rest = solver.effector_poses()
+
+    def targets(lift):
+        out = {n: gsik.Target.from_transform(rest[n]) for n in ("pelvis", "left_foot")}
+        for hand in ("left_hand", "right_hand"):
+            out[hand] = gsik.Target(rest[hand][:3, 3] + [0.0, lift, 0.05], position_only=True)
+        return out
+
+    solver.set_posture(solver.q)
+    assert solver.solve(targets(0.0)).status is gsik.Status.CONVERGED
+    assert reached == [False]  # cold: reached first
+    for lift in (0.01, 0.02, 0.25):  # a frame's move, then a jump
+        r = solver.solve(targets(lift))
+        assert r.status is gsik.Status.CONVERGED
+        assert r.position_errors.max() <= solver.settings.position_tolerance
+    assert reached == [False]  # every warm one settled from where the last converged
