@@ -412,12 +412,12 @@ class AttemptPolicy:
                 st, it = done
                 return st, it
             if posture is not None:
-                c.curvature_begin(q, R, p, self._warm_attempt)
+                c.curvature_begin(q, R, p, self._warm_attempt, posture.converged)
             for it in range(1, iterations + 1):
                 before = q.copy() if settled is not None else None
                 st = step(q, W, R, p, lam)
                 if settled is not None:
-                    c.curvature_learn(q, R, p)
+                    c.curvature_learn(q, R, p, st.converged)
                 if st.held or (st.converged and not settles):
                     break
                 if settled is not None and settled(first_step(), q - before, st.converged):

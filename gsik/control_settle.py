@@ -91,22 +91,24 @@ class ControlSettle:
             self._settle_calls[self._restoring] = call
         return call
 
-    def curvature_begin(self, q: np.ndarray, R: np.ndarray, p: np.ndarray, carry: bool) -> None:
-        """A settle's start at ``q`` (n,) [rad] (world frames ``R``, ``p``) for the Python loop: the targets' curvature
-        learnt (:mod:`gsik.kernels.curvature`) swapped into the posture's level, from what the last settle learnt
-        (``carry``: a drag's warm solve) or from the posture's own normal matrix (:func:`~gsik.kernels.curvature.begin`,
-        where the compiled loop calls it). Nothing where none is learnt (:meth:`_learning`)."""
+    def curvature_begin(self, q: np.ndarray, R: np.ndarray, p: np.ndarray, carry: bool, met: bool) -> None:
+        """A settle's start at ``q`` (n,) [rad] (world frames ``R``, ``p``; ``met``: every target within its
+        tolerances there) for the Python loop: the targets' curvature learnt (:mod:`gsik.kernels.curvature`) swapped
+        into the posture's level, from what the last settle learnt (``carry``: a drag's warm solve) or from the
+        posture's own normal matrix (:func:`~gsik.kernels.curvature.begin`, where the compiled loop calls it).
+        Nothing where none is learnt (:meth:`_learning`)."""
         cur = self._learning()
         if cur is not None:
-            self._call(cv.begin, cur, self._posture_rows.normal, carry, self._task_model, q, R, p)
+            self._call(cv.begin, cur, self._posture_rows.normal, carry, met, self._task_model, q, R, p)
 
-    def curvature_learn(self, q: np.ndarray, R: np.ndarray, p: np.ndarray) -> None:
-        """Learn from the step that left ``q`` (n,) [rad] (world frames ``R``, ``p``): the Python loop's
-        :func:`gsik.kernels.curvature.learn`, where the compiled loop calls it."""
+    def curvature_learn(self, q: np.ndarray, R: np.ndarray, p: np.ndarray, met: bool) -> None:
+        """Learn from the step that left ``q`` (n,) [rad] (world frames ``R``, ``p``; ``met``: every target within
+        its tolerances there): the Python loop's :func:`gsik.kernels.curvature.learn`, where the compiled loop calls
+        it."""
         cur = self._learning()
         if cur is not None:
             self._call(cv.learn, cur, self._task_model, self._tasks_in.packed_row, self._posture_rows.reference, q,
-                       R, p, self._posture_rows.normal)
+                       R, p, self._posture_rows.normal, met)
 
     def curvature_end(self) -> None:
         """A settle's end (the compiled loop's already made it; a step that raised left it): the posture's own

@@ -84,9 +84,10 @@ class SolverSettings:
         posture_tolerance: A :meth:`Solver.solve` attempt with a posture (and no balance) ends at a step that
             starts and ends with every target within its tolerances and whose estimate of the posture's change still
             to come (its Gauss-Newton step) is at most this on every DOF [rad]; its steps take the share of the
-            posture's step that a secant along the last two moves calls for (:class:`gsik.stall.PostureSettle`).
-            0 disables both: the attempt goes on until a step gains less than ``settle_tolerance`` or the stall
-            window ends it. :meth:`Solver.step` ignores it.
+            posture's step that a secant along the last two moves calls for (:class:`gsik.stall.PostureSettle`),
+            and with a full posture (the learned prior) they learn the targets' curvature
+            (:mod:`gsik.kernels.curvature`). 0 disables all three: the attempt goes on until a step gains less than
+            ``settle_tolerance`` or the stall window ends it. :meth:`Solver.step` ignores it.
         warm_start: Start each frame's sweeps from the previous frame's ``dq``
             (in a solve, each linearisation's from the last step taken).
         orientation_weight: Weight of orientation rows relative to position

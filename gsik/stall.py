@@ -123,6 +123,11 @@ class PostureSettle:
         self._last_move = np.zeros(0)  # the last posture move (n_dofs,) [rad]: move_buffer(n)
 
     @property
+    def converged(self) -> bool:
+        """Every target within its tolerances after the last step (at the start pose before one)."""
+        return bool(self.state[settle.CONVERGED])
+
+    @property
     def contraction(self) -> float:
         """The ratio of the last two whole steps' largest DOFs measured last (or the one carried in)."""
         return float(self.state[settle.CONTRACTION_NOW])

@@ -86,12 +86,12 @@ def test_the_posture_level_holds_the_curvature_only_while_a_settle_runs():
     assert cur is not None and cur.state[cv.S_LEARNT] > 0  # it learnt
     assert np.array_equal(normal, cur.P) and not np.array_equal(cur.B, cur.P)  # ... and keeps it out of a step()
     before = cur.B.copy()
-    c.curvature_begin(solver.q, solver._ws.R, solver._ws.p, True)
+    c.curvature_begin(solver.q, solver._ws.R, solver._ws.p, True, True)
     assert np.array_equal(normal, before)  # a warm settle goes on from it
     c.curvature_end()
     c.curvature_end()  # once: the second changes nothing
     assert np.array_equal(normal, cur.P) and np.array_equal(cur.B, before)
-    c.curvature_begin(solver.q, solver._ws.R, solver._ws.p, False)
+    c.curvature_begin(solver.q, solver._ws.R, solver._ws.p, False, True)
     assert np.array_equal(normal, cur.P) and cur.state[cv.S_LEARNT] == 0  # any other starts from the posture's
     c.curvature_end()
 
@@ -152,3 +152,22 @@ def test_a_diagonal_posture_learns_nothing(monkeypatch):
     for f in range(3):
         solver.solve(studio_drag_targets(poses, f))
     assert solver._last_controller._curvature is None
+
+
+def test_an_unreachable_targets_solve_learns_nothing(monkeypatch):
+    """Hands 0.9 m above their reach: no step meets the targets, so no multiplier models a constraint's force and
+    the settle stays Gauss-Newton's, bit for bit."""
+    out = []
+    for learns in (True, False):
+        monkeypatch.setattr(ControlSettle, "learns_curvature", learns)
+        solver, poses = studio_drag_solver(True)
+        targets = studio_drag_targets(poses, 0)
+        for hand in ("left_hand", "right_hand"):
+            t = targets[hand]
+            targets[hand] = gsik.Target(t.position + [0.0, 0.9, 0.0], position_only=True, priority=t.priority)
+        r = solver.solve(targets)
+        assert r.status is not gsik.Status.CONVERGED
+        c = solver._last_controller
+        assert c._curvature is None or c._curvature.state[cv.S_LEARNT] == 0
+        out.append((r.q.tobytes(), r.iterations, r.status))
+    assert out[0] == out[1]

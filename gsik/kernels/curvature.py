@@ -38,8 +38,9 @@ POWELL_FRACTION = 0.2
 #: The multipliers' normal matrix ``J J^T`` gets this fraction of its mean diagonal on its diagonal: a rank-deficient
 #: ``J`` (a stretched arm) still has a least-squares solution, and a full one's moves by that fraction only.
 MULTIPLIER_DAMPING = 1e-9
-# Indices of Curvature.state: steps learnt since B was last P; B is in the posture's level (a settle runs, 1.0 / 0.0).
-S_LEARNT, S_ON = range(2)
+# Indices of Curvature.state: steps learnt since B was last P; B is in the posture's level (a settle runs, 1.0 / 0.0);
+# the targets were met at q0 (1.0 / 0.0).
+S_LEARNT, S_ON, S_MET = range(3)
 
 
 class Curvature(NamedTuple):
@@ -51,7 +52,7 @@ class Curvature(NamedTuple):
         q0: (n,) [rad] the pose ``J0`` is at. J0, J1: (6m, n) the targets' Jacobian at ``q0`` and after a step.
         G: (M, M) the multipliers' normal matrix, lam: (M,) the multipliers (M: the packed target rows).
         g, s, y, Bs: (n,) the posture's gradient, the step [rad], the gradient's change, ``B s``.
-        state: (2,) the ``S_*`` figures.
+        state: (3,) the ``S_*`` figures.
     """
 
     P: np.ndarray
@@ -75,20 +76,21 @@ def make_curvature(normal: np.ndarray, task_rows: int) -> Curvature:
     P = np.array(normal, dtype=float)
     return Curvature(P, P.copy(), np.zeros(n), np.zeros((task_rows, n)), np.zeros((task_rows, n)),
                      np.zeros((task_rows, task_rows)), np.zeros(task_rows), np.zeros(n), np.zeros(n), np.zeros(n),
-                     np.zeros(n), np.zeros(2))
+                     np.zeros(n), np.zeros(3))
 
 
 @njit(cache=True, _nrt=False)
-def begin(cur, normal, carry, task_model, q, R, p):
-    """A settle's start at ``q`` (n,) [rad] (world frames ``R``, ``p``): ``B`` swapped into the posture's level
-    (``normal`` (n, n), which holds ``P`` until :func:`end`), from the last settle's (``carry``) or from ``P``; the
-    targets' Jacobian at ``q`` into ``cur.J0``."""
+def begin(cur, normal, carry, met, task_model, q, R, p):
+    """A settle's start at ``q`` (n,) [rad] (world frames ``R``, ``p``; ``met``: every target within its tolerances
+    there): ``B`` swapped into the posture's level (``normal`` (n, n), which holds ``P`` until :func:`end`), from the
+    last settle's (``carry``) or from ``P``; the targets' Jacobian at ``q`` into ``cur.J0``."""
     n = q.shape[0]
     if not carry:
         _copy(cur.B, cur.P)
         cur.state[S_LEARNT] = 0.0
     _copy(normal, cur.B)
     cur.state[S_ON] = 1.0
+    cur.state[S_MET] = 1.0 if met else 0.0
     jacobian(task_model, R, p, cur.J0)
     for d in range(n):
         cur.q0[d] = q[d]
@@ -106,11 +108,14 @@ def end(cur, normal):
 
 
 @njit(cache=True, _nrt=False)
-def learn(cur, task_model, packed_row, reference, q, R, p, B):
+def learn(cur, task_model, packed_row, reference, q, R, p, B, met):
     """Update ``B`` (n, n) (the posture's ``normal`` while a settle runs), in place, by the step from ``cur.q0`` to
     ``q`` (n,) [rad] (world frames ``R``, ``p``), then go on from ``q``. ``packed_row`` (M,): the target rows' error
     rows (a controller with balance, whose rows are filled per step, never learns); ``reference`` (n,): the
-    posture's angles [rad]. No step (``q`` is ``q0``): nothing changes. Returns True if ``B`` was updated."""
+    posture's angles [rad]. No step (``q`` is ``q0``): nothing changes. Only a step that starts and ends with
+    every target within its tolerances (``met`` at ``q``, ``cur.state[S_MET]`` at ``q0``) updates ``B``: the
+    multipliers model targets that are met (an unreachable hand's residual is no constraint's force; with one, a
+    cold solve's settle stays Gauss-Newton's). Returns True if ``B`` was updated."""
     n = q.shape[0]
     s, moved = cur.s, False
     for d in range(n):
@@ -119,8 +124,11 @@ def learn(cur, task_model, packed_row, reference, q, R, p, B):
     if not moved:
         return False
     jacobian(task_model, R, p, cur.J1)
-    _multipliers(cur, packed_row, reference, q)
-    updated = _bfgs(cur, packed_row, B)
+    updated = False
+    if met and cur.state[S_MET] > 0.0:  # both ends of the step on the targets
+        _multipliers(cur, packed_row, reference, q)
+        updated = _bfgs(cur, packed_row, B)
+    cur.state[S_MET] = 1.0 if met else 0.0
     _copy(cur.J0, cur.J1)
     for d in range(n):
         cur.q0[d] = q[d]

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from gsik._jit import njit
 from gsik.kernels import curvature, priority, step_inputs
-from gsik.kernels.settle import settled
+from gsik.kernels.settle import CONVERGED, settled
 
 #: :func:`settle_steps`'s first result: the steps ran (the rest of the tuple holds), or a level's Jacobian went
 #: non-finite at step ``steps`` (the controller raises, as its step does).
@@ -43,7 +43,7 @@ def settle_steps(s, W, q, R, p, lam, iterations, rest, state, gain, last_move, m
     steps = 0
     n = q.shape[0]
     if learning:
-        curvature.begin(cur, s.posture.normal, carry, s.task_model, q, R, p)
+        curvature.begin(cur, s.posture.normal, carry, state[CONVERGED] > 0.0, s.task_model, q, R, p)
     for steps in range(1, iterations + 1):
         for d in range(n):
             before[d] = q[d]
@@ -57,7 +57,8 @@ def settle_steps(s, W, q, R, p, lam, iterations, rest, state, gain, last_move, m
         converged, cost, lagging = end[3] > 0.0, end[4], end[5] > 0.0
         accepted, held, step_norm = step_inputs.judged(s, end, True)  # a posture is on
         if learning:
-            curvature.learn(cur, s.task_model, s.tasks.packed_row, s.posture.reference, q, R, p, s.posture.normal)
+            curvature.learn(cur, s.task_model, s.tasks.packed_row, s.posture.reference, q, R, p, s.posture.normal,
+                            converged)
         if held:
             break
         for d in range(n):
