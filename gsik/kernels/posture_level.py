@@ -33,8 +33,8 @@ A step whose share was bounded has not settled (the posture has further to go th
 window does not count it as creeping (:func:`gsik.kernels.accept.commit`), nor ``Solver.step()`` as converged.
 
 The level's kernels allocate nothing and are compiled without numba's reference counting (``_nrt=False``, as in
-:mod:`gsik.kernels.kinematics`); :func:`prioritized_step_posture` allocates the step's buffers and says ``_nrt=True``
-(see :mod:`gsik.kernels.priority`).
+:mod:`gsik.kernels.kinematics`): a controller steps in its own buffers (:func:`prioritized_step_posture_in`);
+:func:`prioritized_step_posture` allocates them and says ``_nrt=True`` (see :mod:`gsik.kernels.priority`).
 """
 
 from __future__ import annotations
@@ -88,18 +88,27 @@ def is_full(normal: np.ndarray) -> bool:
 @njit(cache=True, _nrt=True)
 def prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, normal,
                              bound, dq, below):
-    """:func:`gsik.kernels.priority.prioritized_step` whose last level is a posture with the normal matrix
+    """:func:`prioritized_step_posture_in` in buffers of its own (allocated: for a caller that steps once)."""
+    wk = priority.make_work(lo.shape[0], priority.largest_level(starts, dampings.shape[0]))
+    return prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                                       box_rel_tol, normal, bound, dq, below)
+
+
+@njit(cache=True, _nrt=False)
+def prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol,
+                                normal, bound, dq, below):
+    """:func:`gsik.kernels.priority.prioritized_step_in` whose last level is a posture with the normal matrix
     ``normal`` (n, n) (:func:`normal_matrix` of its rows, weights 1), solved by its normal equations, its share of the
     step bounded by ``bound`` [rad] (> 0; else not bounded: :func:`_bound_share`); ``normal`` (0, n): the pivoted
-    QR's level, bit for bit :func:`~gsik.kernels.priority.prioritized_step`, never bounded. Same arguments before
-    ``bound``, same ``dq`` (n,) [rad] (to rounding); ``below`` (n,): scratch, the target levels' own step where the
-    share is bounded. Returns ``(status, largest component of the share before bounding [rad], 0 when not
-    bounded)``."""
+    QR's level, bit for bit :func:`~gsik.kernels.priority.prioritized_step_in`, never bounded. Same arguments before
+    ``bound`` (``wk``: a :class:`~gsik.kernels.priority.Work` for every level, the posture's ``n`` rows too), same
+    ``dq`` (n,) [rad] (to rounding); ``below`` (n,): scratch, the target levels' own step where the share is bounded.
+    Returns ``(status, largest component of the share before bounding [rad], 0 when not bounded)``."""
     posture = dampings.shape[0] - 1
     if normal.shape[0] == 0 or posture < 0 or starts[posture + 1] - starts[posture] != normal.shape[0]:
-        return priority.prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
-                                         box_rel_tol, dq), 0.0
-    wk, last = priority.begin(starts, dampings, lo, dq)
+        return priority.prioritized_step_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                                            box_rel_tol, dq), 0.0
+    last = priority.begin(wk, starts, dampings, dq)
     status, z0, rz, identity = priority.solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol,
                                                      box_tol, box_rel_tol, posture, last, dq)
     if status != priority.OK:

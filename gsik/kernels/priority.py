@@ -17,10 +17,12 @@ rows transposed, the basis as rows): a reflection is then two sweeps of ``x += a
 LLVM turns into vector operations, instead of one short dot product per row (a chain of dependent adds; about three
 times slower at these sizes).
 
-The kernels that allocate nothing are compiled without numba's reference counting (``_nrt=False``, as in
-:mod:`gsik.kernels.kinematics`). Those that allocate the step's buffers (:func:`make_work`, :func:`begin`,
-:func:`prioritized_step`) say ``_nrt=True``: a kernel that leaves it unset inherits its caller's setting when
-compiled from one (:mod:`gsik.kernels.control`'s uncounted kernels call them).
+A caller that steps often keeps one :class:`Work` (:func:`make_work`, sized by :func:`largest_level`) and steps in
+it (:func:`prioritized_step_in`: a controller's, :attr:`gsik.kernels.control.ControlWork.priority`); allocating the
+buffers took ~1 µs of a ~28 µs step. The kernels that allocate nothing are compiled without numba's reference
+counting (``_nrt=False``, as in :mod:`gsik.kernels.kinematics`). Those that allocate the step's buffers
+(:func:`make_work`, :func:`prioritized_step`) say ``_nrt=True``: a kernel that leaves it unset inherits its caller's
+setting when compiled from one.
 """
 
 from __future__ import annotations
@@ -76,7 +78,8 @@ class Work(NamedTuple):
 
 @njit(cache=True, _nrt=True)
 def make_work(n, m):
-    """A :class:`Work` (uninitialised but ``locked``, all False): one allocation, cut."""
+    """A :class:`Work` for ``n`` DOFs and levels of at most ``m`` rows (uninitialised but ``locked``, all False): one
+    allocation, cut."""
     sizes = (n * n, n * n, n * n, n * m, n * m, n * m, m, m, m, m, m, n, n, n, n, n, n)
     ends = np.cumsum(np.array(sizes))
     buf = np.empty(ends[-1])
@@ -91,9 +94,18 @@ def make_work(n, m):
 
 @njit(cache=True, _nrt=True)
 def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq):
+    """:func:`prioritized_step_in` in buffers of its own (allocated: for a caller that steps once)."""
+    wk = make_work(lo.shape[0], largest_level(starts, dampings.shape[0]))
+    return prioritized_step_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq)
+
+
+@njit(cache=True, _nrt=False)
+def prioritized_step_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq):
     """Strict-priority damped least squares within ``lo <= dq <= hi``, into ``dq`` (n,) [rad].
 
     Args:
+        wk: the :class:`Work` to step in, for ``n`` DOFs and at least :func:`largest_level` rows (what it held
+            before does not matter).
         rows: (M, n) every level's Jacobian rows, level by level. errors, weights: (M,) their errors and
             weights (>= 0). starts: (L + 1,) int64, level ``l`` is rows ``starts[l]:starts[l + 1]``.
         dampings: (L,) each level's damping. lo, hi: (n,) the box, ``lo <= 0 <= hi``.
@@ -105,7 +117,7 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
     Returns:
         :data:`OK`, or :data:`NOT_FINITE` when a level's matrix held a non-finite number (``dq`` is then undefined).
     """
-    wk, last = begin(starts, dampings, lo, dq)
+    last = begin(wk, starts, dampings, dq)
     status, _, _, _ = solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol,
                                    last + 1, last, dq)
     if status == OK:
@@ -113,17 +125,25 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
     return status
 
 
-@njit(cache=True, _nrt=True)
-def begin(starts, dampings, lo, dq):
-    """``(wk, last)``: the :class:`Work` for these levels and the last level with rows (-1: none); ``dq`` zeroed."""
+@njit(cache=True, _nrt=False)
+def largest_level(starts, levels):
+    """The most rows (>= 0) of the first ``levels`` levels of ``starts`` (L + 1,): the rows a :class:`Work` needs."""
     m_max = 0
+    for lv in range(levels):
+        m_max = max(m_max, starts[lv + 1] - starts[lv])
+    return m_max
+
+
+@njit(cache=True, _nrt=False)
+def begin(wk, starts, dampings, dq):
+    """The last level with rows (-1: none); ``dq`` zeroed and ``wk.locked`` all False (no DOF held yet)."""
     last = -1  # the last level with rows: the free basis is needed only above it
     for lv in range(dampings.shape[0]):
         if starts[lv + 1] > starts[lv]:
             last = lv
-            m_max = max(m_max, starts[lv + 1] - starts[lv])
     dq[:] = 0.0
-    return make_work(lo.shape[0], m_max), last
+    wk.locked[:] = False
+    return last
 
 
 @njit(cache=True, _nrt=False)
