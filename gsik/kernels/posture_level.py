@@ -17,7 +17,7 @@ largest row norm (at most ``sigma_max(L)``). Both are then the same step up to r
   once per four), ``N = Z^T P Z`` (rz, rz) its dot products with the basis' rows: no level weighing, no product with
   the factor's transpose, no pivoted QR;
 - when a DOF locks at the box, the basis is turned so that only its first direction moves that DOF
-  (:func:`gsik.kernels.priority._without_dof`) and that direction dropped: ``Z^T P`` and ``N`` are turned by the
+  (:func:`gsik.kernels.null_basis.without_dof`) and that direction dropped: ``Z^T P`` and ``N`` are turned by the
   same reflection in ``O(rz n)`` and ``O(rz^2)`` and the level re-solved by an ``rz x rz`` Cholesky factorisation, not
   factored from scratch.
 
@@ -43,6 +43,7 @@ import numpy as np
 
 from gsik._jit import njit
 from gsik.kernels import priority
+from gsik.kernels.null_basis import identity_into, reflect_rows, without_dof
 from gsik.kernels.pgs import _cholesky_solve
 from gsik.kernels.rows import axpy1, dot, dot1
 from gsik.kernels.step import copy_into
@@ -118,7 +119,7 @@ def prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, lo,
         copy_into(below, dq)
     if rz > 0:
         if identity:
-            priority._identity_into(wk.Zt, lo.shape[0])
+            identity_into(wk.Zt, lo.shape[0])
         _posture_level(wk, rows, errors, starts[posture], starts[posture + 1], normal, z0, rz, dq, lo, hi,
                        dampings[posture], box_tol, box_rel_tol)
     priority.clip(dq, lo, hi)
@@ -184,9 +185,9 @@ def _posture_level(wk, rows, errors, start, stop, P, z0, rz, dq, lo, hi, damping
             dq[d] += alpha * step[d]
         dq[blocking] = hi[blocking] if step[blocking] > 0.0 else lo[blocking]
         wk.locked[blocking] = True
-        scale = priority._without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
+        scale = without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
         if scale > 0.0:
-            priority._reflect_rows(ZP, n, rz, wk.u, scale, wk.w)
+            reflect_rows(ZP, n, rz, wk.u, scale, wk.w)
             _turn(N, rz, wk.u, scale, wk.z)
             z0 += 1
             rz -= 1
@@ -281,7 +282,7 @@ def _damped_solve(wk, g, ZP, N, z0, rz, dq, damping):
 @njit(cache=True, _nrt=False)
 def _turn(N, rz, u, scale, w):
     """``N[:rz - 1, :rz - 1] = (H N H)[1:, 1:]`` with ``H = I - scale u u^T`` (``u`` (rz,)): ``Z^T P Z`` after
-    :func:`gsik.kernels.priority._without_dof` turned the basis by ``H`` and dropped its first direction. ``w``:
+    :func:`gsik.kernels.null_basis.without_dof` turned the basis by ``H`` and dropped its first direction. ``w``:
     (rz,) scratch."""
     uw = 0.0
     for c in range(rz):

@@ -33,8 +33,9 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik._jit import njit
+from gsik.kernels.null_basis import identity_into, null_basis, reflect_rows, without_dof
 from gsik.kernels.pgs import _cholesky_solve
-from gsik.kernels.rows import axpy, axpy1, dot, dot1, rank1, reflect
+from gsik.kernels.rows import axpy, axpy1, dot, dot1, reflect
 
 #: Status :func:`prioritized_step` returns: done, or a level's matrix held a non-finite number.
 OK, NOT_FINITE = 0, 1
@@ -242,8 +243,8 @@ def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_to
                 dq[d] += wk.step[d]
             if basis_needed and k > 0:
                 if identity:
-                    _identity_into(wk.Zt, n)
-                _null_basis(wk, k, ra, z0)
+                    identity_into(wk.Zt, n)
+                null_basis(wk, k, ra, z0)
                 return z0 + k, rz - k, False
             return z0, rz, identity
         for d in range(n):
@@ -251,11 +252,11 @@ def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_to
         dq[blocking] = hi[blocking] if wk.step[blocking] > 0.0 else lo[blocking]
         wk.locked[blocking] = True
         if identity:
-            _identity_into(wk.Zt, n)
+            identity_into(wk.Zt, n)
             identity = False
-        scale = _without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
+        scale = without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
         if scale > 0.0:
-            _reflect_rows(wk.AT0, m, rz, wk.u, scale, wk.w)
+            reflect_rows(wk.AT0, m, rz, wk.u, scale, wk.w)
             z0 += 1
             rz -= 1
         if rz == 0:
@@ -285,21 +286,13 @@ def _active_first(wk, m, z0, rz, identity):
         if c == ra:
             break
         if identity:
-            _identity_into(Zt, n)
+            identity_into(Zt, n)
             identity = False
         for i in range(m):
             AT0[c, i], AT0[ra, i] = AT0[ra, i], AT0[c, i]
         for d in range(n):
             Zt[z0 + c, d], Zt[z0 + ra, d] = Zt[z0 + ra, d], Zt[z0 + c, d]
     return ra, identity
-
-
-@njit(cache=True, _nrt=False)
-def _identity_into(Zt, n):
-    for i in range(n):
-        for d in range(n):
-            Zt[i, d] = 0.0
-        Zt[i, i] = 1.0
 
 
 @njit(cache=True, _nrt=False)
@@ -438,69 +431,3 @@ def _largest_fraction(dq, step, lo, hi, box_tol, box_rel_tol):
     if blocking < 0:
         return 1.0, -1
     return max(best, 0.0), blocking
-
-
-@njit(cache=True, _nrt=False)
-def _null_basis(wk, k, ra, z0):
-    """The free basis below this level, ``(Z Q)^T`` with ``Q = H_0 ... H_(k-1)``: the reflections applied to the
-    ``ra`` directions the level sees (rows of ``wk.Zt`` from ``z0``) in place, first to last; rows from ``z0 + k`` on
-    then span the directions left free (``Z Q[:, k:]``, then those it does not see), rows ``z0 ... z0 + k - 1`` the
-    level's row space. Only the columns where those rows have nonzeros are turned."""
-    Zt = wk.Zt
-    n = Zt.shape[1]
-    first, end = n, 0
-    for c in range(z0, z0 + ra):
-        for d in range(first):
-            if Zt[c, d] != 0.0:
-                first = d
-                break
-        for d in range(n - 1, end - 1, -1):
-            if Zt[c, d] != 0.0:
-                end = d + 1
-                break
-    for j in range(k):
-        reflect(Zt, z0, wk.V, j, wk.beta[j], j, ra, first, end, wk.zw)
-
-
-@njit(cache=True, _nrt=False)
-def _without_dof(Zt, z0, rz, dof, u, w):
-    """Turn the live rows of ``Zt`` by the reflection ``I - scale u u^T`` (``u`` (rz,) filled here) so that only the
-    first moves DOF ``dof``; returns ``scale`` (the caller then drops that row), or 0 when no row moves it.
-    ``w``: (n,) scratch."""
-    n = Zt.shape[1]
-    s2 = 0.0
-    for c in range(rz):
-        s2 += Zt[z0 + c, dof] * Zt[z0 + c, dof]
-    norm = math.sqrt(s2)
-    if norm < 1e-12:
-        return 0.0
-    # The reflection maps the column's direction onto the first axis; the other rows span its complement.
-    uu = 0.0
-    for c in range(rz):
-        u[c] = Zt[z0 + c, dof] / norm
-    u[0] += 1.0 if u[0] >= 0.0 else -1.0
-    for c in range(rz):
-        uu += u[c] * u[c]
-    scale = 2.0 / uu
-    w[:] = 0.0
-    for c in range(rz):
-        if u[c] != 0.0:  # a zero adds exactly nothing
-            axpy1(w, u[c], Zt, z0 + c, 0, n)
-    for c in range(rz):
-        if u[c] != 0.0:
-            rank1(Zt, z0 + c, -scale * u[c], w, 0, n)
-        Zt[z0 + c, dof] = 0.0  # exactly, not to rounding
-    return scale
-
-
-@njit(cache=True, _nrt=False)
-def _reflect_rows(AT0, m, rz, u, scale, w):
-    """``AT0 = ((I - scale u u^T) AT0)[1:]``: ``(J Z)^T`` after :func:`_without_dof` turned ``Z``, without the
-    product. ``w``: (m,) scratch."""
-    for i in range(m):
-        w[i] = 0.0
-    for c in range(rz):
-        axpy1(w, u[c], AT0, c, 0, m)
-    for c in range(1, rz):
-        for i in range(m):
-            AT0[c - 1, i] = AT0[c, i] - scale * u[c] * w[i]
