@@ -7,10 +7,10 @@ the drag's start pose (``pins``: a diagonal factor). Printed, one run:
 1. In how many of ``--frames`` frames of ``Solver.step()`` the last :func:`gsik.kernels.accept.control_step` made
    restoring steps (``R_RESTORED``).
 2. At every 20th frame's committed pose, the pieces of one step, each timed ``--repeat`` times inside one compiled
-   loop (no dispatch), medians over the frames [µs]: the strict-priority kernel (pivoted QR every level) on its first
-   1, 2 and all 3 packed levels (the last's cost is the difference; the pins' and hands' levels alone are what a
-   restoring step solves), the step's kernel on all of them as the step calls it
-   (:func:`~gsik.kernels.posture_level.prioritized_step_posture`: a full or diagonal posture by its normal equations;
+   loop (no dispatch), medians over the frames [µs], in the controller's buffers: the strict-priority kernel (pivoted
+   QR every level) on its first 1, 2 and all 3 packed levels (the last's cost is the difference; the pins' and hands'
+   levels alone are what a restoring step solves), the step's kernel on all of them as the step calls it
+   (:func:`~gsik.kernels.posture_level.prioritized_step_posture_in`: a full or diagonal posture by its normal equations;
    a diagonal one timed by the pivoted QR too, as the step solved it before: what the normal equations save),
    :func:`~gsik.kernels.control.linearise`, :func:`~gsik.kernels.control.trial` (forward kinematics and level state),
    and :func:`~gsik.kernels.control.step_trial` (the three, with the dampings and the box, as a step calls them).
@@ -36,18 +36,19 @@ from gsik.kernels import accept, control, posture_level, priority  # noqa: E402
 
 
 @njit
-def _priority_loop(repeat, rows, errors, weights, starts, dampings, lo, hi, tols, dq):
+def _priority_loop(repeat, pw, rows, errors, weights, starts, dampings, lo, hi, tols, dq):
     rank_tol, box_tol, box_rel_tol = tols
     for _ in range(repeat):
-        priority.prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq)
+        priority.prioritized_step_in(pw, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                                     box_rel_tol, dq)
 
 
 @njit
-def _posture_loop(repeat, rows, errors, weights, starts, dampings, lo, hi, tols, normal, bound, dq, below):
+def _posture_loop(repeat, pw, rows, errors, weights, starts, dampings, lo, hi, tols, normal, bound, dq, below):
     rank_tol, box_tol, box_rel_tol = tols
     for _ in range(repeat):
-        posture_level.prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
-                                               box_rel_tol, normal, bound, dq, below)
+        posture_level.prioritized_step_posture_in(pw, rows, errors, weights, starts, dampings, lo, hi, rank_tol,
+                                                  box_tol, box_rel_tol, normal, bound, dq, below)
 
 
 @njit
@@ -91,13 +92,15 @@ def _pieces(solver, repeat: int) -> dict[str, float]:
     out = {}
     for levels in range(1, len(wk.dampings) + 1):
         out[f"priority kernel, levels 0-{levels - 1}"] = _cpu_us(
-            _priority_loop, repeat, *packed, tasks.starts[:levels + 1], wk.dampings[:levels], wk.lo, wk.hi, c._tols, dq)
+            _priority_loop, repeat, wk.priority, *packed, tasks.starts[:levels + 1], wk.dampings[:levels], wk.lo,
+            wk.hi, c._tols, dq)
     rows = c._posture_rows
-    out["the step's kernel, all levels"] = _cpu_us(_posture_loop, repeat, *packed, tasks.starts, wk.dampings, wk.lo,
-                                                    wk.hi, c._tols, rows.normal, rows.share[0], dq, wk.below)
+    out["the step's kernel, all levels"] = _cpu_us(_posture_loop, repeat, wk.priority, *packed, tasks.starts,
+                                                    wk.dampings, wk.lo, wk.hi, c._tols, rows.normal, rows.share[0],
+                                                    dq, wk.below)
     if rows.normal.shape[0] > 0 and not posture_level.is_full(rows.normal):  # a diagonal posture (pins): by the QR
         out["  the same, posture by pivoted QR"] = _cpu_us(
-            _posture_loop, repeat, *packed, tasks.starts, wk.dampings, wk.lo, wk.hi, c._tols,
+            _posture_loop, repeat, wk.priority, *packed, tasks.starts, wk.dampings, wk.lo, wk.hi, c._tols,
             np.zeros((0, q.shape[0])), 0.0, dq, wk.below)
     out["linearise"] = _cpu_us(_linearise_loop, repeat, c._task_model, tasks, c._posture_rows, q, R, p,
                                c._cache.e.copy(), wk)

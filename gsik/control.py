@@ -173,8 +173,7 @@ class Controller(ControlTargets, ControlSettle):
                                          0.5 * self._tolerance, self._tolerance,
                                          lag_factors(self._task_level) * self._tolerance, packed_row, packed_weight,
                                          starts)
-        self._work = ck.make_work(self._sk.n_frames, self._sk.n_dofs, len(self._tasks), int(starts[-1]), L,
-                                  len(counts))
+        self._work = ck.make_work(self._sk.n_frames, self._sk.n_dofs, len(self._tasks), starts, L)
         self._entries = {}  # compiled entry points, made at first use for these inputs
         self._layout = None  # a result's errors are reported where these row weights use a row
         per_task = 0.5 * TIGHTEN_FRACTION ** 2 * (w[:, 0] * s.position_tolerance ** 2
@@ -261,7 +260,7 @@ class Controller(ControlTargets, ControlSettle):
         step limit counts from ``q`` (:func:`gsik.kernels.control.box`)."""
         wk, tols = self._work, self._tols
         self._call(ck.box, q, q_from, self._lower, self._upper, self._settings.max_step, wk.lo, wk.hi)
-        if self._call(priority_kernel.prioritized_step, wk.rows, wk.errors, wk.weights,
+        if self._call(priority_kernel.prioritized_step_in, wk.priority, wk.rows, wk.errors, wk.weights,
                       self._tasks_in.starts[:levels + 1], wk.dampings[:levels], wk.lo, wk.hi, tols[0], tols[1],
                       tols[2], wk.dq) != priority_kernel.OK:
             raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")

@@ -157,7 +157,7 @@ def test_a_full_step_whose_posture_share_was_bounded_never_creeps_and_starts_the
     or one whose share was within the bound, is the plain window's."""
     n, tolerance_norms, met = 4, np.array([1e-4, 0.0]), np.array([False, False])
     posture = posture_rows(np.zeros(n), np.eye(n) + 0.1 * np.ones((n, n)))  # a full factor: bounded
-    wk = make_work(1, n, 1, n, 1, 2)
+    wk = make_work(1, n, 1, np.array([0, 0, n]), 1)
     assert posture.share[0] > 0.0
 
     def creeping_window():

@@ -175,7 +175,7 @@ def test_the_uncounted_kernels_neither_keep_nor_drop_a_reference():
             solver.step(studio_drag_targets(poses, f))
         solver.solve()
         gc.collect()
-        held.append([sys.getrefcount(a) for a in (*controller._cache, *controller._work, *controller._window,
+        held.append([sys.getrefcount(a) for a in (*controller._cache, *controller._work, *controller._work.priority,
                                                   *controller._tasks_in, *controller._posture_rows)])
     assert solver._controller is controller
     assert held[1] == held[0]

@@ -365,8 +365,8 @@ def restore(task_model, fk, tasks, posture, root, W, lower, upper, max_step, q, 
     for _ in range(restoring):
         linearise(task_model, tasks, posture, wk.q, wk.R, wk.p, wk.e, wk)
         box(q, wk.q, lower, upper, max_step, wk.lo, wk.hi)
-        status = priority.prioritized_step(wk.rows, wk.errors, wk.weights, tasks.starts[:L + 1], wk.dampings[:L],
-                                           wk.lo, wk.hi, rank_tol, box_tol, box_rel_tol, wk.dq)
+        status = priority.prioritized_step_in(wk.priority, wk.rows, wk.errors, wk.weights, tasks.starts[:L + 1],
+                                              wk.dampings[:L], wk.lo, wk.hi, rank_tol, box_tol, box_rel_tol, wk.dq)
         if status != priority.OK:
             return -1 - status, 0
         trial(fk, tasks, posture, root, W, lower, upper, wk.q, wk.dq, 1.0, wk)

@@ -14,7 +14,7 @@ compiled over named contracts, so a step is one call (:func:`step_trial`) and a 
 The packed levels (:class:`gsik.priority.PackedLevels`) are the target levels in priority order (balance's two
 rows, filled by the caller, where it sits), then the posture's rows. Balance's state and rows are the caller's
 (:mod:`gsik.balance`): with balance on, the caller runs :func:`linearise`, fills its rows, then
-:func:`gsik.kernels.priority.prioritized_step` and :func:`trial`.
+:func:`gsik.kernels.priority.prioritized_step_in` and :func:`trial`.
 numba's cache checks a kernel against its own file only: the compiled strict-priority step
 (:mod:`gsik.kernels.priority`) is inside this module's cached kernels, and a change to that file alone leaves them
 stale (delete ``gsik/kernels/__pycache__/*.nb[ic]`` after one).
@@ -33,7 +33,7 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
-from gsik.kernels.posture_level import POSTURE_SHARE, is_full, normal_matrix, prioritized_step_posture
+from gsik.kernels.posture_level import POSTURE_SHARE, is_full, normal_matrix, prioritized_step_posture_in
 
 # Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
 # convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0); the full
@@ -121,6 +121,8 @@ class ControlWork(NamedTuple):
         e: (6m,) the trial's error rows. err: (2, m) its tasks' position [m] and orientation [rad] errors.
         costs: (L + 1,) the trial's level costs, the posture's last. met: (L + 1,) bool the trial's met levels.
         M: (3, 3) scratch. out: (5,) the trial's ``O_*`` figures. below: (n,) the target levels' step [rad].
+        priority: the strict-priority step's buffers (:class:`gsik.kernels.priority.Work`, for the largest packed
+            level), kept between steps.
     """
 
     J: np.ndarray
@@ -141,18 +143,22 @@ class ControlWork(NamedTuple):
     M: np.ndarray
     out: np.ndarray
     below: np.ndarray
+    priority: priority.Work
 
 
-def make_work(n_frames: int, n_dofs: int, n_tasks: int, n_packed: int, n_levels: int, n_packed_levels: int) \
-        -> ControlWork:
-    """A :class:`ControlWork` for ``n_levels`` (L) target and balance levels packed into ``n_packed`` rows of
-    ``n_packed_levels`` levels."""
+def make_work(n_frames: int, n_dofs: int, n_tasks: int, starts: np.ndarray, n_levels: int) -> ControlWork:
+    """A :class:`ControlWork` for ``n_levels`` (L) target and balance levels packed into the levels ``starts`` (K + 1,)
+    (:attr:`ControlTasks.starts`)."""
     n, m = n_dofs, n_tasks
+    n_packed = int(starts[-1])
+    step_work = priority.make_work(n, int(np.max(np.diff(starts), initial=0)))
+    for a in step_work:
+        a[...] = 0  # scratch, but the same bytes in every controller: its steps are reproducible buffer for buffer
     return ControlWork(np.zeros((6 * m, n)), np.zeros((n_packed, n)), np.zeros(n_packed), np.zeros(n_packed),
-                       np.zeros(n_packed_levels), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+                       np.zeros(len(starts) - 1), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                        np.zeros((n_frames, 3, 3)), np.zeros((n_frames, 3)), np.zeros(6 * m), np.zeros((2, m)),
                        np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(5),
-                       np.zeros(n))
+                       np.zeros(n), step_work)
 
 
 @njit(cache=True, _nrt=False)
@@ -276,7 +282,7 @@ def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, 
     """One prioritised step from ``q`` (n,) [rad] (frames ``R``, ``p``, error rows ``e``, level ``costs`` there) and
     its trial, into ``wk``: the levels linearised and packed (:func:`linearise`), each one's damping
     (:func:`dampings_into`, the adaptive ``lam`` and the ``base`` damping, ``near`` (L,)), the box (:func:`box`),
-    the step ``wk.dq`` (:func:`gsik.kernels.posture_level.prioritized_step_posture`, a full posture's level by its
+    the step ``wk.dq`` (:func:`gsik.kernels.posture_level.prioritized_step_posture_in`, a full posture's level by its
     normal equations, its share bounded by ``posture.share``; ``tols``: its rank, box and relative box tolerances,
     a tuple) and the trial at ``q + dq`` (:func:`trial`). ``wk.out[O_STATUS]``: the step kernel's status (no trial
     when not OK), ``wk.out[O_SHARE]`` the posture share's largest component before its bound."""
@@ -285,9 +291,9 @@ def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, 
     dampings_into(costs, near, lam, base, posture_on, wk.dampings)
     box(q, q, lower, upper, max_step, wk.lo, wk.hi)
     rank_tol, box_tol, box_rel_tol = tols
-    status, share = prioritized_step_posture(wk.rows, wk.errors, wk.weights, tasks.starts, wk.dampings, wk.lo,
-                                             wk.hi, rank_tol, box_tol, box_rel_tol, posture.normal, posture.share[0],
-                                             wk.dq, wk.below)
+    status, share = prioritized_step_posture_in(wk.priority, wk.rows, wk.errors, wk.weights, tasks.starts,
+                                                wk.dampings, wk.lo, wk.hi, rank_tol, box_tol, box_rel_tol,
+                                                posture.normal, posture.share[0], wk.dq, wk.below)
     wk.out[O_STATUS] = status
     wk.out[O_SHARE] = share
     if status == priority.OK:

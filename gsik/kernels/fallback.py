@@ -215,8 +215,8 @@ def _levels_step(task_model, fk, tasks, posture, root, W, lower, upper, max_step
     linearise(task_model, tasks, posture, q, R, p, e0, wk)
     box(q, q, lower, upper, max_step, wk.lo, wk.hi)
     rank_tol, box_tol, box_rel_tol = tols
-    status = priority.prioritized_step(wk.rows, wk.errors, wk.weights, tasks.starts[:levels + 1],
-                                       wk.dampings[:levels], wk.lo, wk.hi, rank_tol, box_tol, box_rel_tol, wk.dq)
+    status = priority.prioritized_step_in(wk.priority, wk.rows, wk.errors, wk.weights, tasks.starts[:levels + 1],
+                                          wk.dampings[:levels], wk.lo, wk.hi, rank_tol, box_tol, box_rel_tol, wk.dq)
     if status == priority.OK:
         trial(fk, tasks, posture, root, W, lower, upper, q, wk.dq, 1.0, wk)
     return status

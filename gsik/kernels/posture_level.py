@@ -17,7 +17,7 @@ largest row norm (at most ``sigma_max(L)``). Both are then the same step up to r
   once per four), ``N = Z^T P Z`` (rz, rz) its dot products with the basis' rows: no level weighing, no product with
   the factor's transpose, no pivoted QR;
 - when a DOF locks at the box, the basis is turned so that only its first direction moves that DOF
-  (:func:`gsik.kernels.priority._without_dof`) and that direction dropped: ``Z^T P`` and ``N`` are turned by the
+  (:func:`gsik.kernels.null_basis.without_dof`) and that direction dropped: ``Z^T P`` and ``N`` are turned by the
   same reflection in ``O(rz n)`` and ``O(rz^2)`` and the level re-solved by an ``rz x rz`` Cholesky factorisation, not
   factored from scratch.
 
@@ -33,8 +33,8 @@ A step whose share was bounded has not settled (the posture has further to go th
 window does not count it as creeping (:func:`gsik.kernels.accept.commit`), nor ``Solver.step()`` as converged.
 
 The level's kernels allocate nothing and are compiled without numba's reference counting (``_nrt=False``, as in
-:mod:`gsik.kernels.kinematics`); :func:`prioritized_step_posture` allocates the step's buffers and says ``_nrt=True``
-(see :mod:`gsik.kernels.priority`).
+:mod:`gsik.kernels.kinematics`): a controller steps in its own buffers (:func:`prioritized_step_posture_in`);
+:func:`prioritized_step_posture` allocates them and says ``_nrt=True`` (see :mod:`gsik.kernels.priority`).
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ import numpy as np
 
 from gsik._jit import njit
 from gsik.kernels import priority
+from gsik.kernels.null_basis import identity_into, reflect_rows, without_dof
 from gsik.kernels.pgs import _cholesky_solve
 from gsik.kernels.rows import axpy1, dot, dot1
 from gsik.kernels.step import copy_into
@@ -88,18 +89,27 @@ def is_full(normal: np.ndarray) -> bool:
 @njit(cache=True, _nrt=True)
 def prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, normal,
                              bound, dq, below):
-    """:func:`gsik.kernels.priority.prioritized_step` whose last level is a posture with the normal matrix
+    """:func:`prioritized_step_posture_in` in buffers of its own (allocated: for a caller that steps once)."""
+    wk = priority.make_work(lo.shape[0], priority.largest_level(starts, dampings.shape[0]))
+    return prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                                       box_rel_tol, normal, bound, dq, below)
+
+
+@njit(cache=True, _nrt=False)
+def prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol,
+                                normal, bound, dq, below):
+    """:func:`gsik.kernels.priority.prioritized_step_in` whose last level is a posture with the normal matrix
     ``normal`` (n, n) (:func:`normal_matrix` of its rows, weights 1), solved by its normal equations, its share of the
     step bounded by ``bound`` [rad] (> 0; else not bounded: :func:`_bound_share`); ``normal`` (0, n): the pivoted
-    QR's level, bit for bit :func:`~gsik.kernels.priority.prioritized_step`, never bounded. Same arguments before
-    ``bound``, same ``dq`` (n,) [rad] (to rounding); ``below`` (n,): scratch, the target levels' own step where the
-    share is bounded. Returns ``(status, largest component of the share before bounding [rad], 0 when not
-    bounded)``."""
+    QR's level, bit for bit :func:`~gsik.kernels.priority.prioritized_step_in`, never bounded. Same arguments before
+    ``bound`` (``wk``: a :class:`~gsik.kernels.priority.Work` for every level, the posture's ``n`` rows too), same
+    ``dq`` (n,) [rad] (to rounding); ``below`` (n,): scratch, the target levels' own step where the share is bounded.
+    Returns ``(status, largest component of the share before bounding [rad], 0 when not bounded)``."""
     posture = dampings.shape[0] - 1
     if normal.shape[0] == 0 or posture < 0 or starts[posture + 1] - starts[posture] != normal.shape[0]:
-        return priority.prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
-                                         box_rel_tol, dq), 0.0
-    wk, last = priority.begin(starts, dampings, lo, dq)
+        return priority.prioritized_step_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                                            box_rel_tol, dq), 0.0
+    last = priority.begin(wk, starts, dampings, dq)
     status, z0, rz, identity = priority.solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol,
                                                      box_tol, box_rel_tol, posture, last, dq)
     if status != priority.OK:
@@ -109,7 +119,7 @@ def prioritized_step_posture(rows, errors, weights, starts, dampings, lo, hi, ra
         copy_into(below, dq)
     if rz > 0:
         if identity:
-            priority._identity_into(wk.Zt, lo.shape[0])
+            identity_into(wk.Zt, lo.shape[0])
         _posture_level(wk, rows, errors, starts[posture], starts[posture + 1], normal, z0, rz, dq, lo, hi,
                        dampings[posture], box_tol, box_rel_tol)
     priority.clip(dq, lo, hi)
@@ -175,9 +185,9 @@ def _posture_level(wk, rows, errors, start, stop, P, z0, rz, dq, lo, hi, damping
             dq[d] += alpha * step[d]
         dq[blocking] = hi[blocking] if step[blocking] > 0.0 else lo[blocking]
         wk.locked[blocking] = True
-        scale = priority._without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
+        scale = without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
         if scale > 0.0:
-            priority._reflect_rows(ZP, n, rz, wk.u, scale, wk.w)
+            reflect_rows(ZP, n, rz, wk.u, scale, wk.w)
             _turn(N, rz, wk.u, scale, wk.z)
             z0 += 1
             rz -= 1
@@ -272,7 +282,7 @@ def _damped_solve(wk, g, ZP, N, z0, rz, dq, damping):
 @njit(cache=True, _nrt=False)
 def _turn(N, rz, u, scale, w):
     """``N[:rz - 1, :rz - 1] = (H N H)[1:, 1:]`` with ``H = I - scale u u^T`` (``u`` (rz,)): ``Z^T P Z`` after
-    :func:`gsik.kernels.priority._without_dof` turned the basis by ``H`` and dropped its first direction. ``w``:
+    :func:`gsik.kernels.null_basis.without_dof` turned the basis by ``H`` and dropped its first direction. ``w``:
     (rz,) scratch."""
     uw = 0.0
     for c in range(rz):

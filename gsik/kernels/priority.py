@@ -17,10 +17,12 @@ rows transposed, the basis as rows): a reflection is then two sweeps of ``x += a
 LLVM turns into vector operations, instead of one short dot product per row (a chain of dependent adds; about three
 times slower at these sizes).
 
-The kernels that allocate nothing are compiled without numba's reference counting (``_nrt=False``, as in
-:mod:`gsik.kernels.kinematics`). Those that allocate the step's buffers (:func:`make_work`, :func:`begin`,
-:func:`prioritized_step`) say ``_nrt=True``: a kernel that leaves it unset inherits its caller's setting when
-compiled from one (:mod:`gsik.kernels.control`'s uncounted kernels call them).
+A caller that steps often keeps one :class:`Work` (:func:`make_work`, sized by :func:`largest_level`) and steps in
+it (:func:`prioritized_step_in`: a controller's, :attr:`gsik.kernels.control.ControlWork.priority`); allocating the
+buffers took ~1 µs of a ~28 µs step. The kernels that allocate nothing are compiled without numba's reference
+counting (``_nrt=False``, as in :mod:`gsik.kernels.kinematics`). Those that allocate the step's buffers
+(:func:`make_work`, :func:`prioritized_step`) say ``_nrt=True``: a kernel that leaves it unset inherits its caller's
+setting when compiled from one.
 """
 
 from __future__ import annotations
@@ -31,8 +33,9 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik._jit import njit
+from gsik.kernels.null_basis import identity_into, null_basis, reflect_rows, without_dof
 from gsik.kernels.pgs import _cholesky_solve
-from gsik.kernels.rows import axpy, axpy1, dot, dot1, rank1, reflect
+from gsik.kernels.rows import axpy, axpy1, dot, dot1, reflect
 
 #: Status :func:`prioritized_step` returns: done, or a level's matrix held a non-finite number.
 OK, NOT_FINITE = 0, 1
@@ -76,7 +79,8 @@ class Work(NamedTuple):
 
 @njit(cache=True, _nrt=True)
 def make_work(n, m):
-    """A :class:`Work` (uninitialised but ``locked``, all False): one allocation, cut."""
+    """A :class:`Work` for ``n`` DOFs and levels of at most ``m`` rows (uninitialised but ``locked``, all False): one
+    allocation, cut."""
     sizes = (n * n, n * n, n * n, n * m, n * m, n * m, m, m, m, m, m, n, n, n, n, n, n)
     ends = np.cumsum(np.array(sizes))
     buf = np.empty(ends[-1])
@@ -91,9 +95,18 @@ def make_work(n, m):
 
 @njit(cache=True, _nrt=True)
 def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq):
+    """:func:`prioritized_step_in` in buffers of its own (allocated: for a caller that steps once)."""
+    wk = make_work(lo.shape[0], largest_level(starts, dampings.shape[0]))
+    return prioritized_step_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq)
+
+
+@njit(cache=True, _nrt=False)
+def prioritized_step_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, dq):
     """Strict-priority damped least squares within ``lo <= dq <= hi``, into ``dq`` (n,) [rad].
 
     Args:
+        wk: the :class:`Work` to step in, for ``n`` DOFs and at least :func:`largest_level` rows (what it held
+            before does not matter).
         rows: (M, n) every level's Jacobian rows, level by level. errors, weights: (M,) their errors and
             weights (>= 0). starts: (L + 1,) int64, level ``l`` is rows ``starts[l]:starts[l + 1]``.
         dampings: (L,) each level's damping. lo, hi: (n,) the box, ``lo <= 0 <= hi``.
@@ -105,7 +118,7 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
     Returns:
         :data:`OK`, or :data:`NOT_FINITE` when a level's matrix held a non-finite number (``dq`` is then undefined).
     """
-    wk, last = begin(starts, dampings, lo, dq)
+    last = begin(wk, starts, dampings, dq)
     status, _, _, _ = solve_levels(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol,
                                    last + 1, last, dq)
     if status == OK:
@@ -113,17 +126,25 @@ def prioritized_step(rows, errors, weights, starts, dampings, lo, hi, rank_tol, 
     return status
 
 
-@njit(cache=True, _nrt=True)
-def begin(starts, dampings, lo, dq):
-    """``(wk, last)``: the :class:`Work` for these levels and the last level with rows (-1: none); ``dq`` zeroed."""
+@njit(cache=True, _nrt=False)
+def largest_level(starts, levels):
+    """The most rows (>= 0) of the first ``levels`` levels of ``starts`` (L + 1,): the rows a :class:`Work` needs."""
     m_max = 0
+    for lv in range(levels):
+        m_max = max(m_max, starts[lv + 1] - starts[lv])
+    return m_max
+
+
+@njit(cache=True, _nrt=False)
+def begin(wk, starts, dampings, dq):
+    """The last level with rows (-1: none); ``dq`` zeroed and ``wk.locked`` all False (no DOF held yet)."""
     last = -1  # the last level with rows: the free basis is needed only above it
     for lv in range(dampings.shape[0]):
         if starts[lv + 1] > starts[lv]:
             last = lv
-            m_max = max(m_max, starts[lv + 1] - starts[lv])
     dq[:] = 0.0
-    return make_work(lo.shape[0], m_max), last
+    wk.locked[:] = False
+    return last
 
 
 @njit(cache=True, _nrt=False)
@@ -222,8 +243,8 @@ def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_to
                 dq[d] += wk.step[d]
             if basis_needed and k > 0:
                 if identity:
-                    _identity_into(wk.Zt, n)
-                _null_basis(wk, k, ra, z0)
+                    identity_into(wk.Zt, n)
+                null_basis(wk, k, ra, z0)
                 return z0 + k, rz - k, False
             return z0, rz, identity
         for d in range(n):
@@ -231,11 +252,11 @@ def _solve_level(wk, m, z0, rz, identity, dq, lo, hi, damping, pivot_tol, box_to
         dq[blocking] = hi[blocking] if wk.step[blocking] > 0.0 else lo[blocking]
         wk.locked[blocking] = True
         if identity:
-            _identity_into(wk.Zt, n)
+            identity_into(wk.Zt, n)
             identity = False
-        scale = _without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
+        scale = without_dof(wk.Zt, z0, rz, blocking, wk.u, wk.zw)
         if scale > 0.0:
-            _reflect_rows(wk.AT0, m, rz, wk.u, scale, wk.w)
+            reflect_rows(wk.AT0, m, rz, wk.u, scale, wk.w)
             z0 += 1
             rz -= 1
         if rz == 0:
@@ -265,21 +286,13 @@ def _active_first(wk, m, z0, rz, identity):
         if c == ra:
             break
         if identity:
-            _identity_into(Zt, n)
+            identity_into(Zt, n)
             identity = False
         for i in range(m):
             AT0[c, i], AT0[ra, i] = AT0[ra, i], AT0[c, i]
         for d in range(n):
             Zt[z0 + c, d], Zt[z0 + ra, d] = Zt[z0 + ra, d], Zt[z0 + c, d]
     return ra, identity
-
-
-@njit(cache=True, _nrt=False)
-def _identity_into(Zt, n):
-    for i in range(n):
-        for d in range(n):
-            Zt[i, d] = 0.0
-        Zt[i, i] = 1.0
 
 
 @njit(cache=True, _nrt=False)
@@ -418,69 +431,3 @@ def _largest_fraction(dq, step, lo, hi, box_tol, box_rel_tol):
     if blocking < 0:
         return 1.0, -1
     return max(best, 0.0), blocking
-
-
-@njit(cache=True, _nrt=False)
-def _null_basis(wk, k, ra, z0):
-    """The free basis below this level, ``(Z Q)^T`` with ``Q = H_0 ... H_(k-1)``: the reflections applied to the
-    ``ra`` directions the level sees (rows of ``wk.Zt`` from ``z0``) in place, first to last; rows from ``z0 + k`` on
-    then span the directions left free (``Z Q[:, k:]``, then those it does not see), rows ``z0 ... z0 + k - 1`` the
-    level's row space. Only the columns where those rows have nonzeros are turned."""
-    Zt = wk.Zt
-    n = Zt.shape[1]
-    first, end = n, 0
-    for c in range(z0, z0 + ra):
-        for d in range(first):
-            if Zt[c, d] != 0.0:
-                first = d
-                break
-        for d in range(n - 1, end - 1, -1):
-            if Zt[c, d] != 0.0:
-                end = d + 1
-                break
-    for j in range(k):
-        reflect(Zt, z0, wk.V, j, wk.beta[j], j, ra, first, end, wk.zw)
-
-
-@njit(cache=True, _nrt=False)
-def _without_dof(Zt, z0, rz, dof, u, w):
-    """Turn the live rows of ``Zt`` by the reflection ``I - scale u u^T`` (``u`` (rz,) filled here) so that only the
-    first moves DOF ``dof``; returns ``scale`` (the caller then drops that row), or 0 when no row moves it.
-    ``w``: (n,) scratch."""
-    n = Zt.shape[1]
-    s2 = 0.0
-    for c in range(rz):
-        s2 += Zt[z0 + c, dof] * Zt[z0 + c, dof]
-    norm = math.sqrt(s2)
-    if norm < 1e-12:
-        return 0.0
-    # The reflection maps the column's direction onto the first axis; the other rows span its complement.
-    uu = 0.0
-    for c in range(rz):
-        u[c] = Zt[z0 + c, dof] / norm
-    u[0] += 1.0 if u[0] >= 0.0 else -1.0
-    for c in range(rz):
-        uu += u[c] * u[c]
-    scale = 2.0 / uu
-    w[:] = 0.0
-    for c in range(rz):
-        if u[c] != 0.0:  # a zero adds exactly nothing
-            axpy1(w, u[c], Zt, z0 + c, 0, n)
-    for c in range(rz):
-        if u[c] != 0.0:
-            rank1(Zt, z0 + c, -scale * u[c], w, 0, n)
-        Zt[z0 + c, dof] = 0.0  # exactly, not to rounding
-    return scale
-
-
-@njit(cache=True, _nrt=False)
-def _reflect_rows(AT0, m, rz, u, scale, w):
-    """``AT0 = ((I - scale u u^T) AT0)[1:]``: ``(J Z)^T`` after :func:`_without_dof` turned ``Z``, without the
-    product. ``w``: (m,) scratch."""
-    for i in range(m):
-        w[i] = 0.0
-    for c in range(rz):
-        axpy1(w, u[c], AT0, c, 0, m)
-    for c in range(1, rz):
-        for i in range(m):
-            AT0[c - 1, i] = AT0[c, i] - scale * u[c] * w[i]
