@@ -111,7 +111,7 @@ def test_a_step_that_raises_in_the_python_loop_leaves_the_postures_own_matrix(mo
     assert np.array_equal(c._posture_rows.normal, c._curvature.P)
 
 
-def _warm_drag(frames: int, learns: bool, monkeypatch) -> list:
+def _warm_drag(frames: int, learns: bool, monkeypatch) -> tuple[list, gsik.Solver]:
     monkeypatch.setattr(ControlSettle, "learns_curvature", learns)
     solver, poses = studio_drag_solver(True)
     return [solver.solve(studio_drag_targets(poses, f)) for f in range(frames)], solver

@@ -151,7 +151,7 @@ def make_work(n_frames: int, n_dofs: int, n_tasks: int, starts: np.ndarray, n_le
     (:attr:`ControlTasks.starts`)."""
     n, m = n_dofs, n_tasks
     n_packed = int(starts[-1])
-    step_work = priority.make_work(n, int(np.max(np.diff(starts), initial=0)))
+    step_work = priority.make_work(n, int(priority.largest_level(starts, len(starts) - 1)))
     for a in step_work:
         a[...] = 0  # scratch, but the same bytes in every controller: its steps are reproducible buffer for buffer
     return ControlWork(np.zeros((6 * m, n)), np.zeros((n_packed, n)), np.zeros(n_packed), np.zeros(n_packed),

@@ -31,6 +31,7 @@ from gsik._jit import njit
 from gsik.kernels.kinematics import jacobian
 from gsik.kernels.pgs import _cholesky_solve
 from gsik.kernels.rows import dot, dot1
+from gsik.kernels.step import copy_into, copy_rows
 
 #: Powell's damping: a step whose curvature ``s^T y`` is below this fraction of ``s^T B s`` updates ``B`` with ``y``
 #: blended towards ``B s`` until it is exactly that fraction (Nocedal & Wright's 0.2).
@@ -83,17 +84,17 @@ def make_curvature(normal: np.ndarray, task_rows: int) -> Curvature:
 def begin(cur, normal, carry, met, task_model, q, R, p):
     """A settle's start at ``q`` (n,) [rad] (world frames ``R``, ``p``; ``met``: every target within its tolerances
     there): ``B`` swapped into the posture's level (``normal`` (n, n), which holds ``P`` until :func:`end`), from the
-    last settle's (``carry``) or from ``P``; the targets' Jacobian at ``q`` into ``cur.J0``."""
-    n = q.shape[0]
+    last settle's (``carry``) or from ``P``; where the targets are met, their Jacobian at ``q`` into ``cur.J0`` (a
+    step from an unmet pose teaches nothing: :func:`learn`)."""
     if not carry:
-        _copy(cur.B, cur.P)
+        copy_rows(cur.B, cur.P)
         cur.state[S_LEARNT] = 0.0
-    _copy(normal, cur.B)
+    copy_rows(normal, cur.B)
     cur.state[S_ON] = 1.0
     cur.state[S_MET] = 1.0 if met else 0.0
-    jacobian(task_model, R, p, cur.J0)
-    for d in range(n):
-        cur.q0[d] = q[d]
+    if met:
+        jacobian(task_model, R, p, cur.J0)
+    copy_into(cur.q0, q)
 
 
 @njit(cache=True, _nrt=False)
@@ -102,8 +103,8 @@ def end(cur, normal):
     second call changes nothing."""
     if cur.state[S_ON] == 0.0:
         return
-    _copy(cur.B, normal)
-    _copy(normal, cur.P)
+    copy_rows(cur.B, normal)
+    copy_rows(normal, cur.P)
     cur.state[S_ON] = 0.0
 
 
@@ -123,26 +124,18 @@ def learn(cur, task_model, packed_row, reference, q, R, p, B, met):
         moved = moved or s[d] != 0.0
     if not moved:
         return False
-    jacobian(task_model, R, p, cur.J1)
     updated = False
-    if met and cur.state[S_MET] > 0.0:  # both ends of the step on the targets
-        _multipliers(cur, packed_row, reference, q)
-        updated = _bfgs(cur, packed_row, B)
+    if met:  # J0 is read only from a met pose: an unmet one's Jacobian is not made
+        jacobian(task_model, R, p, cur.J1)
+        if cur.state[S_MET] > 0.0:  # both ends of the step on the targets
+            _multipliers(cur, packed_row, reference, q)
+            updated = _bfgs(cur, packed_row, B)
+        copy_rows(cur.J0, cur.J1)
     cur.state[S_MET] = 1.0 if met else 0.0
-    _copy(cur.J0, cur.J1)
-    for d in range(n):
-        cur.q0[d] = q[d]
+    copy_into(cur.q0, q)
     if updated:
         cur.state[S_LEARNT] += 1.0
     return updated
-
-
-@njit(cache=True, _nrt=False)
-def _copy(X, Y):
-    """``X[:] = Y`` (2-d, one shape)."""
-    for i in range(X.shape[0]):
-        for j in range(X.shape[1]):
-            X[i, j] = Y[i, j]
 
 
 @njit(cache=True, _nrt=False)
