@@ -361,7 +361,9 @@ class AttemptPolicy:
         c = self._make_controller()
         if q0.tobytes() != self._q.tobytes():  # the current angles are within the limits: clipped as they are
             self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
-        self._refresh_frames()
+            self._refresh_frames()
+        elif not self._warm_attempt:  # a warm attempt starts where the last solve left angles and frames together
+            self._refresh_frames()
         first, converged = self._control_positions_first(c, iterations)
         st, it = self._control_steps(c, iterations - first, converged)
         self._stepped = st is not None  # nothing moves the pose after this attempt's last step (see _solve_result)

@@ -66,7 +66,9 @@ class ControlSettle:
         stats = _new_tuple(ControlStats, (accepted, held, converged, cost, step_norm, lagging))
         self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
         self._last_held = held
-        return (stats._replace(held=True) if settled else stats), steps
+        if settled:  # the settle test ended the loop: the step counts as held (a new tuple: cheaper than _replace)
+            stats = _new_tuple(ControlStats, (accepted, True, converged, cost, step_norm, lagging))
+        return stats, steps
 
     def share_bounded(self) -> bool:
         """True if the last step's posture share was scaled onto its bound (:func:`gsik.kernels.accept.share_bounded`):

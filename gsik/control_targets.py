@@ -4,8 +4,9 @@ A mixin of :class:`~gsik.control.Controller`, which owns the state it works on. 
 :class:`~gsik.control_inputs.FrameTask` (:meth:`~ControlTargets.retarget`), as ``{name: gsik.Target}``
 (:meth:`~ControlTargets.retarget_targets`) or, on a drag's every frame, gathered from the solver's packed rows in one
 compiled call (:meth:`~ControlTargets.retarget_rows`, :func:`gsik.kernels.gather.gather_targets`). A result's errors
-are those the last step left when it committed the pose they are for (:func:`gsik.kernels.gather.gather_result`),
-else evaluated (:func:`gsik.kernels.control.report_errors`).
+are those the last step left when it committed the pose they are for, else evaluated
+(:func:`gsik.kernels.kinematics.effector_errors`), then gathered (:func:`gsik.kernels.gather.gather_result`, by
+:func:`gsik.kernels.control.report_errors`' rule).
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ import numpy as np
 
 from gsik.control_inputs import _ordered, row_weights
 from gsik.kernels import accept as ak
-from gsik.kernels import control as ck
 from gsik.kernels import gather
 from gsik.kernels import kinematics as kernels
 from gsik.kernels import target_state as ts
@@ -128,16 +128,15 @@ class ControlTargets:
         caller knows nothing moved it since), so the errors that step evaluated there are reported as they are."""
         if self._layout is None or self._layout[0] != effector_names:
             self._layout = self._report_layout(effector_names)
-        _, names, index, used = self._layout
+        _, names, _, used = self._layout
         n = len(q)
         values = np.empty(n + 2 * len(names))
         if left and self._errors_left:
-            squares = self._call(gather.gather_result, q, self._work.err, used, values)
-        else:
-            values[:n] = q
-            squares = q.dot(q)
-            self._call(ck.report_errors, R, p, self._tasks_in, index, self._e, self._err, self._M,
-                       values[n:].reshape(2, -1))
+            err = self._work.err
+        else:  # evaluated here, then gathered by the same rule (report_errors'): no NumPy call on the angles
+            self._task_errors(R, p)
+            err = self._err
+        squares = self._call(gather.gather_result, q, err, used, values)
         return _new_tuple(ControlReport, (names, values, math.isfinite(squares)))
 
     def _report_layout(self, effector_names: tuple[str, ...]) -> tuple:

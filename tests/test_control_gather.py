@@ -15,6 +15,7 @@ import gsik.control
 from gsik.control_targets import ControlTargets
 from gsik.kernels import accept as ak
 from gsik.kernels import gather, step_inputs
+from gsik.kernels.control import report_errors
 from gsik.prior import bundled_prior, use_prior
 
 from solver_helpers import studio_drag_solver, studio_drag_targets
@@ -171,6 +172,22 @@ def test_a_committed_steps_errors_are_reported_as_a_fresh_evaluation_finds_them(
     solver, c, targets = _pinned()
     assert c._errors_left  # the step was committed by the compiled path
     assert _report(solver, True) == _report(solver, False)
+
+
+def test_a_fresh_report_is_report_errors_evaluation_bit_for_bit():
+    # Controller.report evaluates the errors (effector_errors) and gathers them by report_errors' rule, which the
+    # compiled frame still calls: the two read alike, a position-only target's unused rows 0.
+    solver, c, targets = _pinned()
+    solver.set_q(solver.q + 0.02)  # from outside: nothing left by a step
+    n, names = len(solver.q), c.report(solver.effector_names, solver._q, solver._ws.R, solver._ws.p).names
+    index = c._layout[2]
+    expected = np.empty((2, len(names)))
+    report_errors(solver._ws.R, solver._ws.p, c._tasks_in, index, c._e.copy(), c._err.copy(), np.zeros((3, 3)),
+                  expected)
+    values = np.frombuffer(_report(solver, False))
+    assert values[:n].tobytes() == solver._q.tobytes()
+    assert values[n:].tobytes() == expected.ravel().tobytes()
+    assert np.count_nonzero(expected[0]) == 3 and expected[1, names.index("left_hand")] == 0.0
 
 
 def test_errors_left_are_not_reported_after_the_targets_or_the_pose_changed():

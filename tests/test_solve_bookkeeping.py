@@ -16,7 +16,8 @@ from gsik.result import Status
 
 class _Afresh(gsik.Solver):
     """The solve as it was before: the targets' convergence at an attempt's start and end evaluated by the
-    controller, the result's errors evaluated again, the controller retargeted from the Target objects."""
+    controller, the result's errors evaluated again, the controller retargeted from the Target objects, the frames
+    evaluated at every attempt's start."""
 
     def _make_controller(self, rows: bool = False):
         return super()._make_controller(rows=False)
@@ -26,6 +27,10 @@ class _Afresh(gsik.Solver):
                 c.errors(self._ws.R, self._ws.p)[1].max(initial=0.0) <= solve_kernels.STAGE_ANGLE:
             return 0, None
         return super()._control_positions_first(c, iterations)
+
+    def _control_solve(self, q0, iterations):
+        self._refresh_frames()  # every attempt's frames evaluated at its start, a warm one's too
+        return super()._control_solve(q0, iterations)
 
     def _control_status(self, c, st):
         if c.converged(self._ws.R, self._ws.p):
@@ -106,6 +111,27 @@ def test_an_orientation_far_off_stages_the_positions_first_as_evaluated_afresh()
     targets["pelvis"] = gsik.Target(targets["pelvis"].position, turn @ targets["pelvis"].rotation)
     assert 0.6 > solve_kernels.STAGE_ANGLE
     _same(solver.solve(targets), afresh.solve(targets))
+
+
+def test_a_warm_drag_moved_whole_between_solves_is_the_same_as_evaluated_afresh():
+    # A warm attempt starts from the frames the solver holds: moving the character and its targets alike
+    # (set_world_from_root) with the angles kept leaves the next solve warm, and its frames must be the moved ones.
+    solver, afresh, poses = _pair("start", 1)
+    shift, statuses = np.zeros(3), []
+    for frame in range(6):
+        if frame in (2, 4):
+            shift += [0.004, 0.0, -0.003]
+            W = solver.world_from_root
+            W[:3, 3] += [0.004, 0.0, -0.003]
+            for s in (solver, afresh):
+                s.set_world_from_root(W)
+        targets = {n: gsik.Target(t.position + shift, t.orientation, position_only=t.position_only,
+                                  priority=t.priority) for n, t in _targets(poses, frame, 1).items()}
+        warm = solver._warm_start(solver._q)
+        a, b = solver.solve(targets), afresh.solve(targets)
+        _same(a, b)
+        statuses.append((warm, a.status))
+    assert all(s == (frame > 0, Status.CONVERGED) for frame, s in enumerate(statuses))
 
 
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
