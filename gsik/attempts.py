@@ -359,10 +359,10 @@ class AttemptPolicy:
     def _control_solve(self, q0: np.ndarray, iterations: int) -> np.ndarray:
         """One attempt of prioritised steps from ``q0`` until the pose holds; statistics as the kernel's solve."""
         c = self._make_controller()
-        if q0.tobytes() != self._q.tobytes():  # the current angles are within the limits: clipped as they are
+        moved = q0.tobytes() != self._q.tobytes()
+        if moved:  # the current angles are within the limits: clipped as they are
             self._q[:] = np.clip(q0, self._skeleton.lower, self._skeleton.upper)
-            self._refresh_frames()
-        elif not self._warm_attempt:  # a warm attempt starts where the last solve left angles and frames together
+        if moved or not self._warm_attempt:  # a warm attempt starts where the last solve left angles and frames
             self._refresh_frames()
         first, converged = self._control_positions_first(c, iterations)
         st, it = self._control_steps(c, iterations - first, converged)

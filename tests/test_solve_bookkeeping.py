@@ -117,12 +117,12 @@ def test_a_warm_drag_moved_whole_between_solves_is_the_same_as_evaluated_afresh(
     # A warm attempt starts from the frames the solver holds: moving the character and its targets alike
     # (set_world_from_root) with the angles kept leaves the next solve warm, and its frames must be the moved ones.
     solver, afresh, poses = _pair("start", 1)
-    shift, statuses = np.zeros(3), []
+    move, shift, statuses = np.array([0.004, 0.0, -0.003]), np.zeros(3), []
     for frame in range(6):
         if frame in (2, 4):
-            shift += [0.004, 0.0, -0.003]
+            shift += move
             W = solver.world_from_root
-            W[:3, 3] += [0.004, 0.0, -0.003]
+            W[:3, 3] += move
             for s in (solver, afresh):
                 s.set_world_from_root(W)
         targets = {n: gsik.Target(t.position + shift, t.orientation, position_only=t.position_only,
