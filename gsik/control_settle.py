@@ -64,7 +64,9 @@ class ControlSettle:
             raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
         self._errors_left = committed
         stats = _new_tuple(ControlStats, (accepted, held, converged, cost, step_norm, lagging))
-        self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if held else None
+        # The held pose's stats are stats._replace(accepted=False, step_norm=0.0), made directly (~1.5 µs less)
+        self._held = (q.copy(), W.copy(), lam[0], _new_tuple(ControlStats, (False, held, converged, cost, 0.0,
+                                                                            lagging))) if held else None
         self._last_held = held
         if settled:  # the settle test ended the loop: the step counts as held (a new tuple: cheaper than _replace)
             stats = _new_tuple(ControlStats, (accepted, True, converged, cost, step_norm, lagging))
