@@ -206,10 +206,9 @@ def _ratios(r: dict, plain: dict) -> str:
     """``r``'s first round's µs as a multiple of the plain path's, then with more rounds the range of each round's
     multiple (``1.9x; 1.8x-2.0x``)."""
     first = f"{r['us'] / plain['us']:.1f}x"
-    rounds = list(zip(r.get("rounds_us", []), plain.get("rounds_us", [])))
-    if len(rounds) < 2:
+    ratios = [a / b for a, b in zip(r["rounds_us"], plain["rounds_us"])]
+    if len(ratios) < 2:
         return first
-    ratios = [a / b for a, b in rounds]
     return f"{first}; {min(ratios):.1f}x-{max(ratios):.1f}x"
 
 

@@ -32,7 +32,7 @@ from gsik.acceptance import BETTER, SAME, WORSE, LevelState, anchored, compare
 from gsik.balance import center_of_mass, com_jacobian, nearest_point_inside, shrink, signed_distance, support_polygon
 from gsik.control_inputs import (CONSTRAINT_TRACKING_ERROR, GROUND_TOLERANCE, TRACKING_ERROR, Balance,  # noqa: F401
                                  ControlStats, FrameTask, Posture, frame_tasks, lag_factors, structure, support)
-from gsik.control_inputs import _ordered, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
+from gsik.control_inputs import _ordered, held_pose, row_weights, structure_of  # noqa: F401  (structure_of re-exported)
 from gsik.control_settle import ControlSettle
 from gsik.control_targets import ControlReport, ControlTargets, _same  # noqa: F401  (ControlReport re-exported)
 from gsik.kernels import compiled_entry
@@ -117,7 +117,7 @@ class Controller(ControlTargets, ControlSettle):
         self._tols = (RANK_TOLERANCE, BOX_TOLERANCE, BOX_RELATIVE_TOLERANCE)
         self._balance = balance
         self._root = skeleton.frame_of(skeleton.root)
-        self._held = None  # (q, world_from_root, damping, ControlStats) of the last step that held the pose
+        self._held = None  # control_inputs.held_pose of the last step that held the pose
         self._rest_damping = self._last_held = False  # start from the base damping; the last step held the pose
         self._layout = None  # what a result reports, for these effectors (ControlTargets._report_layout)
         self._rows = None  # each task's row in the solver's packed targets (ControlTargets.use_rows), or None
@@ -359,7 +359,7 @@ class Controller(ControlTargets, ControlSettle):
 
     def _stats(self, q, W, lam, stats: ControlStats) -> ControlStats:
         """``stats``; a held pose is kept until the targets change (a frame asked for anyway changes nothing)."""
-        self._held = (q.copy(), W.copy(), lam[0], stats._replace(accepted=False, step_norm=0.0)) if stats.held else None
+        self._held = held_pose(q, W, lam[0], stats.converged, stats.cost, stats.lagging) if stats.held else None
         self._last_held = stats.held
         return stats
 

@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik import kernels
-from gsik.control_inputs import ControlStats
+from gsik.control_inputs import held_pose
 from gsik.kernels import frame_step as fk
 from gsik.kernels import step_inputs
 from gsik.result import SolveResult, Status
@@ -98,8 +98,7 @@ class ControlFrame:
         # What the general path's _make_controller, Controller._moved, Controller.step and _stats leave.
         self._controller = c
         c._first, c._rest_damping, c._errors_left, c._last_held = None, False, left, held
-        c._held = (self._q.copy(), self._W.copy(), self._ws.lam[0],
-                   _new_tuple(ControlStats, (False, True, converged, cost, 0.0, lagging))) if held else None
+        c._held = held_pose(self._q, self._W, self._ws.lam[0], converged, cost, lagging) if held else None
         if not finite:
             return self._control_refused()
         status = _CONVERGED if converged else _STALLED if held else _BUDGET_EXHAUSTED

@@ -76,6 +76,13 @@ class ControlStats(NamedTuple):
     lagging: bool = False
 
 
+def held_pose(q: np.ndarray, W: np.ndarray, damping: float, converged: bool, cost: float, lagging: bool) -> tuple:
+    """What a controller keeps of a step that held the pose until the targets change (``Controller._held``):
+    ``(q (n,) [rad] copied, world_from_root (4, 4) copied, damping, ControlStats)``; the stats those a step from
+    there reports again (held, not accepted, step norm 0), made directly (no ``_replace``: a warm solve's call)."""
+    return q.copy(), W.copy(), damping, tuple.__new__(ControlStats, (False, True, converged, cost, 0.0, lagging))
+
+
 def _ordered(tasks) -> list[FrameTask]:
     """Tasks by priority, then name: one order for building and retargeting."""
     return sorted(tasks, key=lambda t: (t.priority, t.name))

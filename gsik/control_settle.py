@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gsik.control_inputs import ControlStats
+from gsik.control_inputs import ControlStats, held_pose
 from gsik.kernels import compiled_entry
 from gsik.kernels import control as ck
 from gsik.kernels import curvature as cv
@@ -64,9 +64,7 @@ class ControlSettle:
             raise np.linalg.LinAlgError("a priority level's Jacobian holds a non-finite number")
         self._errors_left = committed
         stats = _new_tuple(ControlStats, (accepted, held, converged, cost, step_norm, lagging))
-        # The held pose's stats are stats._replace(accepted=False, step_norm=0.0), made directly (~1.5 µs less)
-        self._held = (q.copy(), W.copy(), lam[0], _new_tuple(ControlStats, (False, held, converged, cost, 0.0,
-                                                                            lagging))) if held else None
+        self._held = held_pose(q, W, lam[0], converged, cost, lagging) if held else None
         self._last_held = held
         if settled:  # the settle test ended the loop: the step counts as held (a new tuple: cheaper than _replace)
             stats = _new_tuple(ControlStats, (accepted, True, converged, cost, step_norm, lagging))

@@ -26,13 +26,6 @@ MOCAP = next((p / "shared" / "mocap" for p in Path(__file__).resolve().parents[2
 #: The bundled prior's build: every 10th frame of every shared clip, and what it says it was learned from
 #: (the README's command, "Natural poses").
 BUNDLED_STRIDE = 10
-#: How close a rebuild comes to the bundled prior: (mean [rad], covariance [rad^2]), largest difference of any entry.
-#: The retargeter's solves carry the last bits of NumPy's BLAS (OpenBLAS picks its kernels by CPU), and on the
-#: humanoid they grow: rebuilt with OpenBLAS's SkylakeX kernels (an AVX-512 machine) against the bundled file (Haswell
-#: kernels, which rebuild it exactly) its mean moves by up to 2.2e-4 and its covariance by 1.6e-3, Prescott's 1.8e-4
-#: and 4.5e-4. A change of the recipe is far above these: every 9th frame instead of every 10th moves them by 6.5e-3
-#: and 9.0e-3. The biped's rebuild moves by at most 2.4e-10 with any of those kernels.
-REBUILT_WITHIN = {"biped": (1e-9, 1e-9), "humanoid": (1e-3, 4e-3)}
 BUNDLED_SOURCE = ("every 10th frame of the shared motion capture, 4 performers, mirrored: mocap_bvhtools_test.bvh "
                   "(test data of the bvhtools 1.6.0 package, MIT licence) and 15 clips of subjects 1, 2 and 3 of the "
                   "CMU Graphics Lab Motion Capture Database (free to use, not to be resold) on the Character "
@@ -42,6 +35,13 @@ HUMANOID_SOURCE = ("every 10th frame of the shared motion capture, 4 performers,
                    "humanoid: mocap_bvhtools_test.bvh (test data of the bvhtools 1.6.0 package, MIT licence) and 15 "
                    "clips of subjects 1, 2 and 3 of the CMU Graphics Lab Motion Capture Database (free to use, not to "
                    "be resold) on the Character Creator rig")
+#: How close a rebuild comes to the bundled prior: (mean [rad], covariance [rad^2]), largest difference of any entry.
+#: The retargeter's solves carry the last bits of NumPy's BLAS (OpenBLAS picks its kernels by CPU), and on the
+#: humanoid they grow: rebuilt with OpenBLAS's SkylakeX kernels (an AVX-512 machine) against the bundled file (Haswell
+#: kernels, which rebuild it exactly) its mean moves by up to 2.2e-4 and its covariance by 1.6e-3, Prescott's 1.8e-4
+#: and 4.5e-4. A change of the recipe is far above these: every 9th frame instead of every 10th moves them by 6.5e-3
+#: and 9.0e-3. The biped's rebuild moves by at most 2.4e-10 with any of those kernels.
+REBUILT_WITHIN = {"biped": (1e-9, 1e-9), "humanoid": (1e-3, 4e-3)}
 
 
 @pytest.fixture(scope="module")
