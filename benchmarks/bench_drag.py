@@ -160,9 +160,9 @@ def _against(run: dict, off: dict) -> dict:
     in ``off`` is at least 1e-3 (``None``: no such frame)."""
     kept = off["cost"] >= 1e-3
     ratio = run["cost"][kept] / off["cost"][kept]
-    return dict(dq=float(np.abs(run["q"] - off["q"]).max()),
-                dx=float(np.linalg.norm(run["points"] - off["points"], axis=-1).max()),
-                ratio=(float(ratio.min()), float(ratio.max())) if ratio.size else None)
+    return {"dq": float(np.abs(run["q"] - off["q"]).max()),
+            "dx": float(np.linalg.norm(run["points"] - off["points"], axis=-1).max()),
+            "ratio": (float(ratio.min()), float(ratio.max())) if ratio.size else None}
 
 
 def _plain(run: dict) -> dict:
