@@ -20,9 +20,10 @@ Paths: plain (every target at priority 0, no posture: the fast kernel), the post
 matrix), with the studio's ``tracking_steps=3``. ``--before PATH`` runs the same with the
 ``gsik`` of another checkout in a subprocess and prints both. ``--rounds K`` drags every path K times in turn and
 adds the range of the K rounds' multiples of plain to the step and solve columns (the first round's figures
-first). Nothing here is asserted by the tests.
+first). Before the first round every path is dragged ``--warmup`` frames untimed (default 30). Nothing here is
+asserted by the tests.
 
-Run: ``python benchmarks/bench_drag.py [--frames 300] [--rounds 3] [--before /tmp/settle-before]``.
+Run: ``python benchmarks/bench_drag.py [--frames 300] [--rounds 3] [--warmup 30] [--before /tmp/settle-before]``.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ PATHS = {"plain": (None, 0), "posture, hands at 0": ("start", 0), "posture, hand
 PULL = np.array([0.0, 0.15, 0.0])  # [m]
 RADIUS = 0.1  # [m]
 TURN_FRAMES = 100
+WARMUP_FRAMES = 30  # untimed frames of every path before the first round (run())
 
 
 def _targets(poses: dict, frame: int, hand_priority: int) -> dict:
@@ -158,9 +160,9 @@ def _against(run: dict, off: dict) -> dict:
     in ``off`` is at least 1e-3 (``None``: no such frame)."""
     kept = off["cost"] >= 1e-3
     ratio = run["cost"][kept] / off["cost"][kept]
-    return dict(dq=float(np.abs(run["q"] - off["q"]).max()),
-                dx=float(np.linalg.norm(run["points"] - off["points"], axis=-1).max()),
-                ratio=(float(ratio.min()), float(ratio.max())) if ratio.size else None)
+    return {"dq": float(np.abs(run["q"] - off["q"]).max()),
+            "dx": float(np.linalg.norm(run["points"] - off["points"], axis=-1).max()),
+            "ratio": (float(ratio.min()), float(ratio.max())) if ratio.size else None}
 
 
 def _plain(run: dict) -> dict:
@@ -168,12 +170,18 @@ def _plain(run: dict) -> dict:
     return {k: v for k, v in run.items() if k not in ("q", "points", "cost")}
 
 
-def run(frames: int, rounds: int = 1) -> dict:
+def run(frames: int, rounds: int = 1, warmup: int = WARMUP_FRAMES) -> dict:
     """``{path: {"step": ..., "solve": ...}}``; each with ``rounds_us``, its median µs in each round. A round drags
     every path in turn, so each round's ratios to the plain path are taken close together in time: on a machine
     whose speed shifts between runs (seen here: the same drag 1.6x slower in one run than the next) a shift between
     two paths of one round shows as that round's ratio standing out, not as the only figure. ``us`` is the first
-    round's (the one the quality figures come with)."""
+    round's (the one the quality figures come with). First, untimed, every path is dragged ``warmup`` frames
+    (stepped and solved): a process's first drag read slower than the later ones (at 30 frames the first round's
+    plain step 23 µs, the next rounds' 14), and plain runs first, so without it the first round's ratios to plain
+    read low."""
+    for posture, prio in PATHS.values() if warmup > 0 else ():
+        for solve in (False, True):
+            _drag(posture, prio, warmup, solve)
     rows = {name: {"step": _plain(_drag(posture, prio, frames, False)), "solve": _solve_drag(posture, prio, frames)}
             for name, (posture, prio) in PATHS.items()}
     for row in rows.values():
@@ -186,8 +194,8 @@ def run(frames: int, rounds: int = 1) -> dict:
     return rows
 
 
-def _print(rows: dict, frames: int, rounds: int) -> None:
-    print(f"load {os.getloadavg()[0]:.1f}; {frames} frames, {rounds} round(s)\n")
+def _print(rows: dict, frames: int, rounds: int, warmup: int) -> None:
+    print(f"load {os.getloadavg()[0]:.1f}; {frames} frames, {rounds} round(s) after {warmup} untimed frames a path\n")
     print("| code | path | step µs (x plain) | hands within 1 mm | pins within 0.1 mm | warm solve() ms (x plain) "
           "| linearisations | solve µs per linearisation (x step) | vs posture_tolerance 0: max rad, mm, cost ratio "
           "| vs settle_refusals off | step frames restored |")
@@ -233,20 +241,22 @@ def main() -> None:
     ap.add_argument("--before", help="a checkout whose gsik to run the same drags with, side by side")
     ap.add_argument("--rounds", type=int, default=1,
                     help="drag every path this many times in turn; the table adds the range of the rounds' ratios")
+    ap.add_argument("--warmup", type=int, default=WARMUP_FRAMES,
+                    help="untimed frames of every path (stepped and solved) before the first round; 0: none")
     ap.add_argument("--json", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.json:
-        print(json.dumps(run(args.frames, args.rounds)))
+        print(json.dumps(run(args.frames, args.rounds, args.warmup)))
         return
     rows = {}
     if args.before:
         env = dict(os.environ, PYTHONPATH=os.path.abspath(args.before))
         cmd = [sys.executable, os.path.abspath(__file__), "--json", "--frames", str(args.frames), "--rounds",
-               str(args.rounds)]
+               str(args.rounds), "--warmup", str(args.warmup)]
         rows["before"] = json.loads(subprocess.run(cmd, env=env, capture_output=True, text=True, check=True,
                                                    cwd=os.path.abspath(args.before)).stdout)
-    rows["after"] = run(args.frames, args.rounds)
-    _print(rows, args.frames, args.rounds)
+    rows["after"] = run(args.frames, args.rounds, args.warmup)
+    _print(rows, args.frames, args.rounds, args.warmup)
 
 
 if __name__ == "__main__":
