@@ -10,8 +10,10 @@ the drag's start pose (``pins``: a diagonal factor). Printed, one run:
    loop (no dispatch), medians over the frames [µs], in the controller's buffers: the strict-priority kernel (pivoted
    QR every level) on its first 1, 2 and all 3 packed levels (the last's cost is the difference; the pins' and hands'
    levels alone are what a restoring step solves), the step's kernel on all of them as the step calls it
-   (:func:`~gsik.kernels.posture_level.prioritized_step_posture_in`: a full or diagonal posture by its normal equations;
-   a diagonal one timed by the pivoted QR too, as the step solved it before: what the normal equations save),
+   (:func:`~gsik.kernels.range_space.prioritized_step_range_in`: every level by the normal equations where that is
+   exact, with how many passes took them, the first a posture not yet seen; and the QR path it falls back to,
+   :func:`~gsik.kernels.posture_level.prioritized_step_posture_in`, a full or diagonal posture by its normal
+   equations; a diagonal one timed by the pivoted QR too, as the step solved it before),
    :func:`~gsik.kernels.control.linearise`, :func:`~gsik.kernels.control.trial` (forward kinematics and level state),
    and :func:`~gsik.kernels.control.step_trial` (the three, with the dampings and the box, as a step calls them).
 
@@ -32,7 +34,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_drag import _solver, _targets  # noqa: E402  (the drag's solver and targets, in one place)
 
 from gsik._jit import njit  # noqa: E402
-from gsik.kernels import accept, control, posture_level, priority  # noqa: E402
+from gsik.kernels import accept, control, posture_level, priority, range_space  # noqa: E402
 
 
 @njit
@@ -49,6 +51,14 @@ def _posture_loop(repeat, pw, rows, errors, weights, starts, dampings, lo, hi, t
     for _ in range(repeat):
         posture_level.prioritized_step_posture_in(pw, rows, errors, weights, starts, dampings, lo, hi, rank_tol,
                                                   box_tol, box_rel_tol, normal, bound, dq, below)
+
+
+@njit
+def _range_loop(repeat, rw, pw, rows, errors, weights, starts, dampings, lo, hi, tols, normal, bound, dq, below):
+    rank_tol, box_tol, box_rel_tol = tols
+    for _ in range(repeat):
+        range_space.prioritized_step_range_in(rw, pw, rows, errors, weights, starts, dampings, lo, hi, rank_tol,
+                                              box_tol, box_rel_tol, normal, bound, dq, below)
 
 
 @njit
@@ -79,7 +89,7 @@ def _cpu_us(loop, repeat: int, *args) -> float:
     return (time.process_time() - t0) / repeat * 1e6
 
 
-def _pieces(solver, repeat: int) -> dict[str, float]:
+def _pieces(solver, repeat: int) -> dict[str, float | tuple[int, int]]:
     """The pieces of a step from the solver's pose [µs]: the levels linearised and boxed there first."""
     c = solver._controller
     wk, s, tasks = c._work, c._settings, c._tasks_in
@@ -95,9 +105,14 @@ def _pieces(solver, repeat: int) -> dict[str, float]:
             _priority_loop, repeat, wk.priority, *packed, tasks.starts[:levels + 1], wk.dampings[:levels], wk.lo,
             wk.hi, c._tols, dq)
     rows = c._posture_rows
-    out["the step's kernel, all levels"] = _cpu_us(_posture_loop, repeat, wk.priority, *packed, tasks.starts,
+    rw = range_space.make_range_work(wk.range_work.C.shape[0], q.shape[0])  # its own: the drag's counts stay
+    out["the step's kernel, all levels"] = _cpu_us(_range_loop, repeat, rw, wk.priority, *packed, tasks.starts,
                                                     wk.dampings, wk.lo, wk.hi, c._tols, rows.normal, rows.share[0],
                                                     dq, wk.below)
+    out["  by the normal equations"] = (int(rw.state[range_space.S_TAKEN]), repeat + 1)  # passes
+    out["  the same by the QR path"] = _cpu_us(_posture_loop, repeat, wk.priority, *packed, tasks.starts,
+                                               wk.dampings, wk.lo, wk.hi, c._tols, rows.normal, rows.share[0],
+                                               dq, wk.below)
     if rows.normal.shape[0] > 0 and not posture_level.is_full(rows.normal):  # a diagonal posture (pins): by the QR
         out["  the same, posture by pivoted QR"] = _cpu_us(
             _posture_loop, repeat, wk.priority, *packed, tasks.starts, wk.dampings, wk.lo, wk.hi, c._tols,
@@ -130,6 +145,10 @@ def main() -> None:
     print(f"{a.posture}: the frame's last compiled step made restoring steps in {restored} of {a.frames} frames; "
           f"medians over {len(rows)} poses, {a.repeat} passes each:")
     for name in rows[0]:
+        if isinstance(rows[0][name], tuple):  # passes: the range over the poses
+            taken = [r[name][0] for r in rows]
+            print(f"  {name:34s} {min(taken)}-{max(taken)} of {rows[0][name][1]} passes")
+            continue
         print(f"  {name:34s} {np.median([r[name] for r in rows]):7.1f} µs")
 
 

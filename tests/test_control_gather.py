@@ -251,7 +251,7 @@ def test_a_step_through_step_inputs_is_the_kernel_given_every_argument(biped):
                 ak.control_step(*head, W, *mid, q, R, p, lam, 1e-3, *tail)
             else:
                 step_inputs.control_step(inputs, W, q, R, p, lam, 1e-3)
-            buffers = [q, R, p, lam, *c._cache, *c._window, *c._work[:-1], *c._work.priority]
+            buffers = [q, R, p, lam, *c._cache, *c._window, *c._work[:-2], *c._work.priority, *c._work.range_work]
             state.append(b"".join(np.ascontiguousarray(a).tobytes() for a in buffers))
         runs.append(state)
     assert runs[0] == runs[1]

@@ -96,7 +96,7 @@ def _assert_same(monkeypatch, *args, **kwargs) -> collections.Counter:
 # (path, frames, hands' offset [m], settle refusals, fallback endings each seen at least once in the Python branches)
 CASES = [("hands at 0", 24, (0.0, 0.0, 0.0), True, [("targets alone", True), ("targets alone", False),
                                                    ("halved", 1, "better"), ("halved", 2, "better"),
-                                                   ("halved", 0, "same"), ("halved", 3, "worse")]),
+                                                   ("halved", 3, "worse")]),
          ("pins", 16, (0.0, 0.0, 0.0), True, [("targets alone", True), ("targets alone", False),
                                              ("halved", 1, "better"), ("halved", 0, "worse")]),
          ("hands at 0", 24, (0.0, 0.1, 0.0), False, [("halved", 3, "same")]),

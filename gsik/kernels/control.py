@@ -33,7 +33,8 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
-from gsik.kernels.posture_level import POSTURE_SHARE, is_full, normal_matrix, prioritized_step_posture_in
+from gsik.kernels.posture_level import POSTURE_SHARE, is_full, normal_matrix
+from gsik.kernels.range_space import RangeWork, make_range_work, prioritized_step_range_in
 
 # Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
 # convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0); the full
@@ -123,6 +124,8 @@ class ControlWork(NamedTuple):
         M: (3, 3) scratch. out: (5,) the trial's ``O_*`` figures. below: (n,) the target levels' step [rad].
         priority: the strict-priority step's buffers (:class:`gsik.kernels.priority.Work`, for the largest packed
             level), kept between steps.
+        range_work: the normal equations' buffers (:class:`gsik.kernels.range_space.RangeWork`, for the target rows),
+            kept between steps (with a full posture's damped inverse).
     """
 
     J: np.ndarray
@@ -144,6 +147,7 @@ class ControlWork(NamedTuple):
     out: np.ndarray
     below: np.ndarray
     priority: priority.Work
+    range_work: RangeWork
 
 
 def make_work(n_frames: int, n_dofs: int, n_tasks: int, starts: np.ndarray, n_levels: int) -> ControlWork:
@@ -158,7 +162,7 @@ def make_work(n_frames: int, n_dofs: int, n_tasks: int, starts: np.ndarray, n_le
                        np.zeros(len(starts) - 1), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                        np.zeros((n_frames, 3, 3)), np.zeros((n_frames, 3)), np.zeros(6 * m), np.zeros((2, m)),
                        np.zeros(n_levels + 1), np.zeros(n_levels + 1, dtype=np.bool_), np.zeros((3, 3)), np.zeros(5),
-                       np.zeros(n), step_work)
+                       np.zeros(n), step_work, make_range_work(int(starts[n_levels]), n))
 
 
 @njit(cache=True, _nrt=False)
@@ -282,8 +286,10 @@ def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, 
     """One prioritised step from ``q`` (n,) [rad] (frames ``R``, ``p``, error rows ``e``, level ``costs`` there) and
     its trial, into ``wk``: the levels linearised and packed (:func:`linearise`), each one's damping
     (:func:`dampings_into`, the adaptive ``lam`` and the ``base`` damping, ``near`` (L,)), the box (:func:`box`),
-    the step ``wk.dq`` (:func:`gsik.kernels.posture_level.prioritized_step_posture_in`, a full posture's level by its
-    normal equations, its share bounded by ``posture.share``; ``tols``: its rank, box and relative box tolerances,
+    the step ``wk.dq`` (:func:`gsik.kernels.range_space.prioritized_step_range_in`: every level by the normal
+    equations where that is exact, else :func:`gsik.kernels.posture_level.prioritized_step_posture_in`, a full
+    posture's level by its normal equations; the posture's share bounded by ``posture.share``; ``tols``: its rank,
+    box and relative box tolerances,
     a tuple) and the trial at ``q + dq`` (:func:`trial`). ``wk.out[O_STATUS]``: the step kernel's status (no trial
     when not OK), ``wk.out[O_SHARE]`` the posture share's largest component before its bound."""
     linearise(task_model, tasks, posture, q, R, p, e, wk)
@@ -291,9 +297,9 @@ def step_trial(task_model, fk, tasks, posture, root, W, lower, upper, max_step, 
     dampings_into(costs, near, lam, base, posture_on, wk.dampings)
     box(q, q, lower, upper, max_step, wk.lo, wk.hi)
     rank_tol, box_tol, box_rel_tol = tols
-    status, share = prioritized_step_posture_in(wk.priority, wk.rows, wk.errors, wk.weights, tasks.starts,
-                                                wk.dampings, wk.lo, wk.hi, rank_tol, box_tol, box_rel_tol,
-                                                posture.normal, posture.share[0], wk.dq, wk.below)
+    status, share = prioritized_step_range_in(wk.range_work, wk.priority, wk.rows, wk.errors, wk.weights, tasks.starts,
+                                              wk.dampings, wk.lo, wk.hi, rank_tol, box_tol, box_rel_tol,
+                                              posture.normal, posture.share[0], wk.dq, wk.below)
     wk.out[O_STATUS] = status
     wk.out[O_SHARE] = share
     if status == priority.OK:

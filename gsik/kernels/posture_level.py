@@ -27,7 +27,7 @@ one breaks a met target level by its second order, the trial is refused at that 
 second prioritised solve at the trial pose, :func:`gsik.kernels.accept.restore`) brings it back. With the bundled
 prior on bench_drag's studio drag the posture's move reached the whole step bound (``max_step``, 0.25 rad) in 174 of
 300 frames, where the moves of the trials accepted at once were ~0.07 rad. The share ``s`` lies in the target
-levels' free basis, so scaling it (:func:`_bound_share`) leaves their linearised errors alone, and the step stays in
+levels' free basis, so scaling it (:func:`bound_share`) leaves their linearised errors alone, and the step stays in
 the (convex) box between two steps inside it; a share within the bound leaves the step bit for bit the unbounded one.
 A step whose share was bounded has not settled (the posture has further to go than one step takes): the stall
 window does not count it as creeping (:func:`gsik.kernels.accept.commit`), nor ``Solver.step()`` as converged.
@@ -100,7 +100,7 @@ def prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, lo,
                                 normal, bound, dq, below):
     """:func:`gsik.kernels.priority.prioritized_step_in` whose last level is a posture with the normal matrix
     ``normal`` (n, n) (:func:`normal_matrix` of its rows, weights 1), solved by its normal equations, its share of the
-    step bounded by ``bound`` [rad] (> 0; else not bounded: :func:`_bound_share`); ``normal`` (0, n): the pivoted
+    step bounded by ``bound`` [rad] (> 0; else not bounded: :func:`bound_share`); ``normal`` (0, n): the pivoted
     QR's level, bit for bit :func:`~gsik.kernels.priority.prioritized_step_in`, never bounded. Same arguments before
     ``bound`` (``wk``: a :class:`~gsik.kernels.priority.Work` for every level, the posture's ``n`` rows too), same
     ``dq`` (n,) [rad] (to rounding); ``below`` (n,): scratch, the target levels' own step where the share is bounded.
@@ -125,11 +125,11 @@ def prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, lo,
     priority.clip(dq, lo, hi)
     if not bounded:
         return priority.OK, 0.0
-    return priority.OK, _bound_share(dq, below, lo, hi, bound)
+    return priority.OK, bound_share(dq, below, lo, hi, bound)
 
 
 @njit(cache=True, _nrt=False)
-def _bound_share(dq, below, lo, hi, bound):
+def bound_share(dq, below, lo, hi, bound):
     """The posture's share ``s = dq - below`` (the step minus the target levels' step ``below``, both (n,) [rad])
     scaled in place to at most ``bound`` [rad] in its largest component: ``dq = below + t s``,
     ``t = min(1, bound / max|s|)``, clipped into ``lo <= dq <= hi`` (rounding only: both ends are in the box).

@@ -1,0 +1,442 @@
+"""The strict-priority step by its normal equations where that is exact: every target level of full rank in the
+directions the levels above leave free, and no DOF meeting its bound.
+
+:mod:`gsik.kernels.priority` solves each level by a pivoted QR of its rows in the free basis ``Z`` and turns ``Z``
+below it; :mod:`gsik.kernels.posture_level` then solves the posture in that basis. Where every target level has full
+row rank there, the same steps follow from the Gram matrix ``K = C C^T`` of the weighted target rows ``C`` (the
+levels stacked, (M, n)) alone:
+
+- level ``l`` (rows ``C_l``, those above ``C_a``): the Schur complement ``S_l = C_l N_l C_l^T`` of ``K``'s block
+  Cholesky factor is ``B B^T`` with ``B = C_l N_l`` (``N_l``: the projector onto the free directions), so the damped
+  step ``B^T (S_l + damping I)^-1 r_l`` (``r_l = e_l - C_l dq``) is ``C_l^T y - C_a^T K_a^-1 K_al y``: the QR's step
+  (both minimise ``|B u - r|^2 + damping |u|^2`` over the free directions), the next level's ``N`` the complement of
+  all rows so far;
+- the posture (``P = L^T L``, :func:`gsik.kernels.posture_level.normal_matrix`): ``u = H^-1 (b - C^T lam)``,
+  ``C H^-1 C^T lam = C H^-1 b``, ``H = P + damping I``, ``b = L^T e - P dq``: the minimiser of the level's damped
+  quadratic with ``C u = 0`` (``Z``'s orthonormal basis leaves ``|u| = |z|``).
+
+Dense dot products over rows of ``n``, no reflections: on bench_drag's drags the step's kernel took 5.9 / 6.5 /
+10.2 µs against the QR path's 15.1 / 13.4 / 12.8 (hands at 0, pins, studio; a script outside the repository timing
+both on the same packed levels). The normal equations square the rows' condition number, so they are taken only where
+it is provably small (:data:`CONDITIONED`). :func:`range_space_step` returns False, ``dq`` then undefined, and the
+caller steps by the QR path (the same step, rank decisions and active set its own) where:
+
+- a level's Cholesky pivot falls below :data:`RANK_MARGIN` times the QR's rank tolerance (it may be
+  rank-deficient: the QR decides the rank), or the target rows are not :data:`CONDITIONED`;
+- a level's step would meet the box (a DOF at its bound: the QR's active set locks it);
+- a number is not finite;
+- the posture's matrix or damping is not the last call's (:func:`_posture_kind`: a full one's damped inverse is
+  made once it holds and kept while it does), or a full one's share is not bounded: a solve()'s settle, whose
+  steps swap the targets' curvature into the level, a matrix a step.
+
+The kernels allocate nothing (``_nrt=False``, as in :mod:`gsik.kernels.kinematics`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from gsik._jit import njit
+from gsik.kernels import priority
+from gsik.kernels.posture_level import bound_share, prioritized_step_posture_in
+from gsik.kernels.rows import axpy1, dot, dot1
+from gsik.kernels.step import copy_into
+
+#: A target level is solved here only when every pivot of its Cholesky factor is above this many times the QR's
+#: pivot tolerance (``rank_tol`` times its largest row norm): well inside full rank, where the QR finds it too.
+RANK_MARGIN = 1e3
+#: And only when the target rows' smallest singular value is provably at least this fraction of their largest row
+#: norm ``s`` (``1 / trace(K^-1) >= (CONDITIONED s)^2``, ``K = C C^T``; the bound is within a factor of the rows'
+#: count of ``lambda_min(K)``): then ``K``'s condition number is at most ``M / CONDITIONED^2`` and the normal
+#: equations lose at most that times the rounding (the QR its square root): ~1e-10 of the step at M = 18.
+CONDITIONED = 1e-3
+
+
+class RangeWork(NamedTuple):
+    """:func:`range_space_step`'s buffers, for ``M`` target rows and ``n`` DOFs (:func:`make_range_work`).
+
+    Attributes:
+        C: (M, n) the weighted target rows, level by level. ce: (M,) their weighted errors.
+        F: (M, M) the Gram matrix's block Cholesky factor (lower; row ``i`` to column ``i``).
+        D: (M, M) a level's damped Schur complement, factored. Y: (M, n) ``C H^-1`` (the posture's level).
+        G: (M, M) ``C H^-1 C^T``, factored. y, t: (M,). step, hb: (n,). Hf: (n, n) scratch (a diagonal ``H^-1`` in
+        its first row; ``H``'s Cholesky factor while inverting it).
+        Hinv: (n, n) ``H^-1 = (P + damping I)^-1`` of a full posture, kept while ``P`` and the damping stay.
+        key: (n, n) the ``P`` last seen. state: (5,) :data:`S_DAMPING` ...
+    """
+
+    C: np.ndarray
+    ce: np.ndarray
+    F: np.ndarray
+    D: np.ndarray
+    Y: np.ndarray
+    G: np.ndarray
+    y: np.ndarray
+    t: np.ndarray
+    step: np.ndarray
+    hb: np.ndarray
+    Hf: np.ndarray
+    Hinv: np.ndarray
+    key: np.ndarray
+    state: np.ndarray
+
+
+#: Where :attr:`RangeWork.state` holds: the damping ``Hinv`` and the posture's kind were made for; the kind
+#: (:data:`UNSEEN`, :data:`DIAGONAL`, :data:`FULL`); whether ``Hinv`` holds that full posture's inverse (1/0); the
+#: steps :func:`prioritized_step_range_in` made here and those it left to the QR path (counts, for benchmarks and
+#: tests).
+S_DAMPING, S_KIND, S_INVERTED, S_TAKEN, S_DECLINED = range(5)
+#: A posture's kind: ``key`` not seen twice in a row yet (the QR path steps: a matrix that changes every step, the
+#: targets' curvature in a settle, is never inverted); diagonal (``H^-1`` a scaling); full (``Hinv`` kept).
+UNSEEN, DIAGONAL, FULL = 0.0, 1.0, 2.0
+
+
+def make_range_work(n_rows: int, n_dofs: int) -> RangeWork:
+    """A :class:`RangeWork` for ``n_rows`` target rows and ``n_dofs`` DOFs (zeros; no posture seen)."""
+    m, n = n_rows, n_dofs
+    return RangeWork(np.zeros((m, n)), np.zeros(m), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, n)),
+                     np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros(n), np.zeros(n), np.zeros((n, n)),
+                     np.zeros((n, n)), np.full((n, n), np.nan), np.array([np.nan, UNSEEN, 0.0, 0.0, 0.0]))
+
+
+@njit(cache=True, _nrt=False)
+def _forward(F, a, b, x):
+    """``x[a:b] = F[a:b, a:b]^-1 x[a:b]`` (lower triangular)."""
+    for i in range(a, b):
+        s = x[i]
+        for j in range(a, i):
+            s -= F[i, j] * x[j]
+        x[i] = s / F[i, i]
+
+
+@njit(cache=True, _nrt=False)
+def _backward(F, a, b, x):
+    """``x[a:b] = F[a:b, a:b]^-T x[a:b]``."""
+    for i in range(b - 1, a - 1, -1):
+        s = x[i]
+        for j in range(i + 1, b):
+            s -= F[j, i] * x[j]
+        x[i] = s / F[i, i]
+
+
+@njit(cache=True, _nrt=False)
+def _factor(A, a, b, least):
+    """``A[a:b, a:b]`` (lower triangle read) replaced by its Cholesky factor; False if a pivot is not above
+    ``least``."""
+    for j in range(a, b):
+        d = A[j, j]
+        for k in range(a, j):
+            d -= A[j, k] * A[j, k]
+        if not d > least * least:
+            return False
+        d = math.sqrt(d)
+        A[j, j] = d
+        for i in range(j + 1, b):
+            v = A[i, j]
+            for k in range(a, j):
+                v -= A[i, k] * A[j, k]
+            A[i, j] = v / d
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def _weigh(rows, errors, weights, start, stop, C, ce, at):
+    """The level's rows ``start:stop`` weighted into ``C``, ``ce`` from row ``at``; returns ``(rows written, their
+    largest norm)`` (rows of weight 0 left out: the QR ranks them out)."""
+    n = rows.shape[1]
+    scale = 0.0
+    out = at
+    for i in range(start, stop):
+        if weights[i] <= 0.0:
+            continue
+        sw = math.sqrt(weights[i])
+        s = 0.0
+        for d in range(n):
+            v = sw * rows[i, d]
+            C[out, d] = v
+            s += v * v
+        ce[out] = sw * errors[i]
+        scale = max(scale, s)
+        out += 1
+    return out, math.sqrt(scale)
+
+
+@njit(cache=True, _nrt=False)
+def _level(rw, a, b, dq, damping, pivot_least):
+    """Level rows ``a:b`` of ``rw.C`` below rows ``0:a``: its block of the Gram factor ``rw.F`` and its damped step
+    into ``rw.step`` (n,); False if its Schur complement is not well inside full rank."""
+    C, F, D, y = rw.C, rw.F, rw.D, rw.y
+    n = dq.shape[0]
+    for i in range(a, b):
+        for j in range(i + 1):
+            F[i, j] = dot(C, i, C, j, 0, n)
+    for i in range(a, b):  # F[a:b, :a] = K[a:b, :a] F[:a, :a]^-T, row by row
+        for j in range(a):
+            s = F[i, j]
+            for k in range(j):
+                s -= F[i, k] * F[j, k]
+            F[i, j] = s / F[j, j]
+    for i in range(a, b):  # the Schur complement, and its damped copy
+        for j in range(a, i + 1):
+            s = F[i, j]
+            for k in range(a):
+                s -= F[i, k] * F[j, k]
+            F[i, j] = s
+            D[i, j] = s
+        D[i, i] += damping
+    if not _factor(F, a, b, pivot_least) or not _factor(D, a, b, 0.0):
+        return False
+    for i in range(a, b):
+        y[i] = rw.ce[i] - dot1(C, i, dq, 0, n)
+    _forward(D, a, b, y)
+    _backward(D, a, b, y)
+    # u = C_l^T y - C_a^T K_a^-1 K_al y; K_al y = F_a (F_la^T y): t = F_la^T y, then F_a^-T t
+    t = rw.t
+    for j in range(a):
+        s = 0.0
+        for i in range(a, b):
+            s += F[i, j] * y[i]
+        t[j] = s
+    _backward(F, 0, a, t)
+    step = rw.step
+    step[:] = 0.0
+    for i in range(a, b):
+        axpy1(step, y[i], C, i, 0, n)
+    for j in range(a):
+        axpy1(step, -t[j], C, j, 0, n)
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def _conditioned(F, m, x, least):
+    """True if ``1 / trace(K^-1) >= least^2`` for ``K = F F^T`` (``F`` (m, m) lower triangular, ``x`` (m,) scratch):
+    ``trace(K^-1) = |F^-1|_F^2`` (its columns by forward substitution) bounds ``1 / lambda_min(K)`` from above."""
+    total = 0.0
+    for j in range(m):
+        for i in range(j, m):
+            v = 1.0 if i == j else 0.0
+            for k in range(j, i):
+                v -= F[i, k] * x[k]
+            x[i] = v / F[i, i]
+            total += x[i] * x[i]
+    return total * least * least <= 1.0
+
+
+@njit(cache=True, _nrt=False)
+def _take(dq, step, lo, hi, box_tol, box_rel_tol):
+    """``dq += step`` if the QR path would take it whole (:func:`gsik.kernels.priority._largest_fraction` finds no
+    DOF blocking); False (``dq`` unchanged) if a DOF would block."""
+    if priority._largest_fraction(dq, step, lo, hi, box_tol, box_rel_tol)[1] >= 0:
+        return False
+    for d in range(dq.shape[0]):
+        dq[d] += step[d]
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def _posture_kind(rw, P, damping, invert):
+    """:data:`DIAGONAL` or :data:`FULL` (``rw.Hinv`` then ``(P + damping I)^-1``) for the posture's normal matrix
+    ``P`` (n, n), or :data:`UNSEEN` where ``P`` or the damping differ from the last call's (kept for the next), or a
+    full ``P`` is not inverted (``invert`` False and not inverted yet; or ``P + damping I`` not positive definite):
+    the QR path steps."""
+    n = P.shape[0]
+    st, key = rw.state, rw.key
+    a, b = key.view(np.int64), P.view(np.int64)
+    same = st[S_DAMPING] == damping
+    for i in range(n):
+        for j in range(n):
+            if a[i, j] != b[i, j]:
+                same = False
+                key[i, j] = P[i, j]
+    if not same:
+        st[S_DAMPING], st[S_KIND], st[S_INVERTED] = damping, UNSEEN, 0.0
+        return UNSEEN
+    if st[S_KIND] == UNSEEN:
+        st[S_KIND] = DIAGONAL if _diagonal(P) else FULL
+    if st[S_KIND] == FULL and st[S_INVERTED] == 0.0:
+        if not (invert and _invert(rw, P, damping)):
+            return UNSEEN
+        st[S_INVERTED] = 1.0
+    return st[S_KIND]
+
+
+@njit(cache=True, _nrt=False)
+def _invert(rw, P, damping):
+    """``rw.Hinv = (P + damping I)^-1`` (n, n), by its Cholesky factor (in ``rw.Hf``); False if not positive
+    definite."""
+    n = P.shape[0]
+    Hf, Hinv = rw.Hf, rw.Hinv
+    for i in range(n):
+        for j in range(i + 1):
+            Hf[i, j] = P[i, j]
+        Hf[i, i] += damping
+    if not _factor(Hf, 0, n, 0.0):
+        return False
+    for c in range(n):
+        col = Hinv[c]  # H^-1 e_c, stored as a row (H^-1 is symmetric)
+        col[:] = 0.0
+        col[c] = 1.0
+        _forward(Hf, 0, n, col)
+        _backward(Hf, 0, n, col)
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def _posture_rhs(rows, errors, start, stop, P, dq, hb):
+    """``hb = L^T e - P dq`` (n,): the posture level's right-hand side (its rows ``start:stop`` are ``L``, weights
+    1)."""
+    n = dq.shape[0]
+    for d in range(n):
+        hb[d] = -dot1(P, d, dq, 0, n)
+    for i in range(start, stop):
+        if errors[i] != 0.0:
+            axpy1(hb, errors[i], rows, i, 0, n)
+
+
+@njit(cache=True, _nrt=False)
+def _posture_full(rw, m, rows, errors, start, stop, P, dq):
+    """The posture's step with the target rows ``rw.C[:m]`` held, ``rw.Hinv`` its damped inverse, into
+    ``rw.step``; False if ``C H^-1 C^T`` is not positive definite."""
+    n = dq.shape[0]
+    Y, G, hb, lam, Hinv, C = rw.Y, rw.G, rw.hb, rw.y, rw.Hinv, rw.C
+    step = rw.step
+    _posture_rhs(rows, errors, start, stop, P, dq, step)
+    hb[:] = 0.0
+    for d in range(n):  # hb = H^-1 b, by rows of the symmetric H^-1
+        if step[d] != 0.0:
+            axpy1(hb, step[d], Hinv, d, 0, n)
+    for i in range(m):  # Y = C H^-1, G = C H^-1 C^T (lower), lam = C H^-1 b
+        yi = Y[i]
+        yi[:] = 0.0
+        for d in range(n):
+            if C[i, d] != 0.0:
+                axpy1(yi, C[i, d], Hinv, d, 0, n)
+        for j in range(i + 1):
+            G[i, j] = dot(Y, i, C, j, 0, n)
+        lam[i] = dot1(C, i, hb, 0, n)
+    if not _factor(G, 0, m, 0.0):
+        return False
+    _forward(G, 0, m, lam)
+    _backward(G, 0, m, lam)
+    for d in range(n):
+        step[d] = hb[d]
+    for i in range(m):
+        axpy1(step, -lam[i], Y, i, 0, n)
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def _diagonal(P):
+    """True if ``P`` (n, n) is zero off its diagonal."""
+    n = P.shape[0]
+    for d in range(n):
+        for j in range(n):
+            if j != d and P[d, j] != 0.0:
+                return False
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
+    """The posture's step for a diagonal ``P`` (``H^-1`` a scaling) with the target rows ``rw.C[:m]`` held, into
+    ``rw.step``; False if ``C H^-1 C^T`` is not positive definite. A uniform one's ``C H^-1 C^T`` is the Gram
+    matrix's, already factored."""
+    n = dq.shape[0]
+    Y, G, hb, lam, C = rw.Y, rw.G, rw.hb, rw.y, rw.C
+    h = rw.Hf[0]  # H^-1's diagonal (n,)
+    uniform = True
+    for d in range(n):
+        h[d] = 1.0 / (P[d, d] + damping)
+        uniform = uniform and P[d, d] == P[0, 0]
+    _posture_rhs(rows, errors, start, stop, P, dq, hb)
+    for d in range(n):
+        hb[d] *= h[d]
+    for i in range(m):
+        lam[i] = dot1(C, i, hb, 0, n)
+    F = rw.F
+    if not uniform:  # uniform: C H^-1 C^T = K / (P_00 + damping), lam = K^-1 C H^-1 b (H^-1 b in hb)
+        F = G
+        for i in range(m):
+            yi, ci = Y[i], C[i]
+            for d in range(n):
+                yi[d] = ci[d] * h[d]
+            for j in range(i + 1):
+                G[i, j] = dot(Y, i, C, j, 0, n)
+        if not _factor(G, 0, m, 0.0):
+            return False
+    _forward(F, 0, m, lam)
+    _backward(F, 0, m, lam)
+    step = rw.step
+    for d in range(n):
+        step[d] = hb[d]
+    for i in range(m):
+        axpy1(step, -lam[i], Y if not uniform else C, i, 0, n)
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def range_space_step(rw, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, normal,
+                     bound, dq, below):
+    """:func:`gsik.kernels.posture_level.prioritized_step_posture_in`'s step before its share bound (the same
+    arguments; ``normal`` (n, n), the posture the last level; a full one is inverted only where its share is
+    bounded, ``bound`` > 0) by the normal equations, into ``dq`` (n,) [rad], the target levels' own step into
+    ``below`` (n,); False where they do not give it (see the module's docstring: ``dq`` and ``below`` are then
+    undefined)."""
+    posture = dampings.shape[0] - 1
+    # A full posture's share is bounded in a drag's steps, never in a solve()'s settle, whose steps swap the targets'
+    # curvature into its level (a matrix a step): inverted only for the former.
+    kind = _posture_kind(rw, normal, dampings[posture], bound > 0.0)
+    if kind == UNSEEN or starts[posture] > rw.C.shape[0]:
+        return False
+    dq[:] = 0.0
+    m = 0
+    top = 0.0  # the largest row norm
+    for lv in range(posture):
+        a = m
+        m, scale = _weigh(rows, errors, weights, starts[lv], starts[lv + 1], rw.C, rw.ce, a)
+        if m == a:
+            continue
+        top = max(top, scale)
+        if not math.isfinite(scale) or scale == 0.0:
+            return False
+        priority._into_box(dq, lo, hi, box_tol)
+        if not (_level(rw, a, m, dq, dampings[lv], RANK_MARGIN * rank_tol * scale)
+                and _take(dq, rw.step, lo, hi, box_tol, box_rel_tol)):
+            return False
+    if not _conditioned(rw.F, m, rw.t, CONDITIONED * top):
+        return False
+    copy_into(below, dq)
+    priority._into_box(dq, lo, hi, box_tol)
+    start, stop = starts[posture], starts[posture + 1]
+    if kind == DIAGONAL:
+        done = _posture_diagonal(rw, m, rows, errors, start, stop, normal, dampings[posture], dq)
+    else:
+        done = _posture_full(rw, m, rows, errors, start, stop, normal, dq)
+    if not (done and _take(dq, rw.step, lo, hi, box_tol, box_rel_tol)):
+        return False
+    priority.clip(dq, lo, hi)
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def prioritized_step_range_in(rw, wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                              box_rel_tol, normal, bound, dq, below):
+    """:func:`gsik.kernels.posture_level.prioritized_step_posture_in` (same arguments after ``rw``, a
+    :class:`RangeWork` for the target rows), by :func:`range_space_step` where it gives the step (the same step to
+    rounding), else by the QR path. Returns ``(status, largest component of the posture's share before bounding
+    [rad], 0 when not bounded)``."""
+    posture = dampings.shape[0] - 1
+    n = lo.shape[0]
+    if posture >= 0 and normal.shape[0] == n and starts[posture + 1] - starts[posture] == n \
+            and range_space_step(rw, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol,
+                                 normal, bound, dq, below):
+        rw.state[S_TAKEN] += 1.0
+        if bound > 0.0:
+            return priority.OK, bound_share(dq, below, lo, hi, bound)
+        return priority.OK, 0.0
+    rw.state[S_DECLINED] += 1.0
+    return prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol,
+                                       box_rel_tol, normal, bound, dq, below)
