@@ -88,7 +88,8 @@ def test_what_it_cannot_take_exactly_it_leaves_to_the_qr_path(rng):
     np.testing.assert_array_equal(dq, qr)
     nearly = levels[0].jacobian[:6] + 1e-6 * rng.normal(size=(6, n))  # the hands' rows nearly the pins'
     close = [levels[0], Level(nearly, levels[1].error, levels[1].weights), levels[2]]
-    dq, taken, qr = _both(close, lo, hi, dampings, normal, bound=10.0)  # ill-conditioned: the QR, not the squared condition
+    # ill-conditioned: the QR, not the normal equations' squared condition number
+    dq, taken, qr = _both(close, lo, hi, dampings, normal, bound=10.0)
     assert not taken
     np.testing.assert_array_equal(dq, qr)
 

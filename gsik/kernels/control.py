@@ -16,8 +16,9 @@ rows, filled by the caller, where it sits), then the posture's rows. Balance's s
 (:mod:`gsik.balance`): with balance on, the caller runs :func:`linearise`, fills its rows, then
 :func:`gsik.kernels.priority.prioritized_step_in` and :func:`trial`.
 numba's cache checks a kernel against its own file only: the compiled strict-priority step
-(:mod:`gsik.kernels.priority`) is inside this module's cached kernels, and a change to that file alone leaves them
-stale (delete ``gsik/kernels/__pycache__/*.nb[ic]`` after one).
+(:mod:`gsik.kernels.priority`, :mod:`~gsik.kernels.posture_level`, :mod:`~gsik.kernels.range_space`) is inside this
+module's cached kernels, and a change to those files alone leaves them stale (delete
+``gsik/kernels/__pycache__/*.nb[ic]`` after one).
 The kernels here, in :mod:`gsik.kernels.accept`, :mod:`gsik.kernels.fallback` and :mod:`gsik.kernels.gather`
 allocate nothing and are compiled without numba's reference counting (``_nrt=False``, as in
 :mod:`gsik.kernels.kinematics`): they copy arrays by loops (:func:`gsik.kernels.step.copy_into`).

@@ -83,7 +83,7 @@ def normal_matrix(factor: np.ndarray) -> np.ndarray:
 def is_full(normal: np.ndarray) -> bool:
     """True if a :func:`normal_matrix` ``normal`` (n, n) is given and not diagonal: a learned prior's, whose share of a
     step is bounded (:data:`POSTURE_SHARE`); a diagonal posture's (pins, the retargeter) never is."""
-    return normal.shape[0] > 0 and not _diagonal(normal)  # the step's own test
+    return normal.shape[0] > 0 and not is_diagonal(normal)  # the step's own test
 
 
 @njit(cache=True, _nrt=True)
@@ -160,7 +160,7 @@ def _posture_level(wk, rows, errors, start, stop, P, z0, rz, dq, lo, hi, damping
     for i in range(start, stop):
         if errors[i] != 0.0:
             axpy1(g, errors[i], rows, i, 0, n)
-    if _diagonal(P):
+    if is_diagonal(P):
         _basis_scaled(wk.Zt, z0, rz, P, ZP)
     else:
         _basis_times(wk.Zt, z0, rz, P, ZP)
@@ -232,7 +232,7 @@ def _basis_times(Zt, z0, rz, P, ZP):
 
 
 @njit(cache=True, _nrt=False)
-def _diagonal(P):
+def is_diagonal(P):
     """True if ``P`` (n, n) is zero off its diagonal (a full one says so at its first nonzero off it)."""
     n = P.shape[0]
     for d in range(n):

@@ -41,7 +41,7 @@ import numpy as np
 
 from gsik._jit import njit
 from gsik.kernels import priority
-from gsik.kernels.posture_level import bound_share, prioritized_step_posture_in
+from gsik.kernels.posture_level import bound_share, is_diagonal, prioritized_step_posture_in
 from gsik.kernels.rows import axpy1, dot, dot1
 from gsik.kernels.step import copy_into
 
@@ -255,7 +255,7 @@ def _posture_kind(rw, P, damping, invert):
         st[S_DAMPING], st[S_KIND], st[S_INVERTED] = damping, UNSEEN, 0.0
         return UNSEEN
     if st[S_KIND] == UNSEEN:
-        st[S_KIND] = DIAGONAL if _diagonal(P) else FULL
+        st[S_KIND] = DIAGONAL if is_diagonal(P) else FULL
     if st[S_KIND] == FULL and st[S_INVERTED] == 0.0:
         if not (invert and _invert(rw, P, damping)):
             return UNSEEN
@@ -329,17 +329,6 @@ def _posture_full(rw, m, rows, errors, start, stop, P, dq):
 
 
 @njit(cache=True, _nrt=False)
-def _diagonal(P):
-    """True if ``P`` (n, n) is zero off its diagonal."""
-    n = P.shape[0]
-    for d in range(n):
-        for j in range(n):
-            if j != d and P[d, j] != 0.0:
-                return False
-    return True
-
-
-@njit(cache=True, _nrt=False)
 def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
     """The posture's step for a diagonal ``P`` (``H^-1`` a scaling) with the target rows ``rw.C[:m]`` held, into
     ``rw.step``; False if ``C H^-1 C^T`` is not positive definite. A uniform one's ``C H^-1 C^T`` is the Gram
@@ -356,9 +345,9 @@ def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
         hb[d] *= h[d]
     for i in range(m):
         lam[i] = dot1(C, i, hb, 0, n)
-    F = rw.F
-    if not uniform:  # uniform: C H^-1 C^T = K / (P_00 + damping), lam = K^-1 C H^-1 b (H^-1 b in hb)
-        F = G
+    # uniform: C H^-1 C^T = K / (P_00 + damping), lam = K^-1 C H^-1 b (H^-1 b in hb), the Gram factor's and C's
+    F, CH = (rw.F, C) if uniform else (G, Y)
+    if not uniform:
         for i in range(m):
             yi, ci = Y[i], C[i]
             for d in range(n):
@@ -373,7 +362,7 @@ def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
     for d in range(n):
         step[d] = hb[d]
     for i in range(m):
-        axpy1(step, -lam[i], Y if not uniform else C, i, 0, n)
+        axpy1(step, -lam[i], CH, i, 0, n)
     return True
 
 
