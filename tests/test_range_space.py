@@ -5,6 +5,7 @@ ill-conditioned level, a DOF meeting its bound, a posture not seen twice); the c
 import numpy as np
 import pytest
 from hypothesis import given, settings
+from hypothesis import strategies as st
 from test_posture_level import _diagonal_factor, _full_factor, posture_problems
 
 from gsik.kernels import priority as priority_kernel
@@ -129,3 +130,19 @@ def test_the_controller_s_drag_steps_by_the_normal_equations():
         solver.step(studio_drag_targets(poses, frame))
     state = solver._controller._work.range_work.state
     assert state[rs.S_TAKEN] >= 10
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_the_conditioning_test_is_the_trace_bound_of_the_gram_matrix(seed):
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(1, 19))
+    rows = rng.normal(size=(m, 30)) * np.exp(rng.uniform(-4.0, 0.0, size=(m, 1)))  # rows of mixed scales
+    F = np.linalg.cholesky(rows @ rows.T)
+    bound = 1.0 / np.sqrt(np.trace(np.linalg.inv(rows @ rows.T)))  # 1 / sqrt(trace(K^-1)) <= sigma_min(rows)
+    assert bound <= np.linalg.svd(rows, compute_uv=False).min() * (1.0 + 1e-9)
+    X = np.zeros((18, 18))
+    assert rs._conditioned(F, m, X, bound * (1.0 - 1e-6))
+    assert not rs._conditioned(F, m, X, bound * (1.0 + 1e-6))
+    inverse = np.linalg.inv(F)  # what it sums: F^-1, row by row into X
+    np.testing.assert_allclose(np.tril(X[:m, :m]), inverse, rtol=1e-9, atol=1e-9 * np.abs(inverse).max())

@@ -36,6 +36,7 @@ from gsik.kernels import priority
 from gsik.kernels.kinematics import effector_errors, frames_into, jacobian
 from gsik.kernels.posture_level import POSTURE_SHARE, is_full, normal_matrix
 from gsik.kernels.range_space import RangeWork, make_range_work, prioritized_step_range_in
+from gsik.kernels.rows import SUMS
 
 # Indices of ControlWork.out: the kernel's status (gsik.kernels.priority.OK / NOT_FINITE), the trial's
 # convergence (1.0 / 0.0), its targets' weighted squared error and whether a target lags (1.0 / 0.0); the full
@@ -193,15 +194,21 @@ def level_state(tasks, posture, q, R, p, e, err, M, costs, met):
             if err[a, k] > tasks.lag[a, k]:
                 lagging = True
     met[met.shape[0] - 1] = False
-    L, ref = posture.factor, posture.reference
+    costs[costs.shape[0] - 1] = 0.5 * posture_squares(posture.factor, posture.reference, q)
+    return converged, target, lagging
+
+
+@njit(cache=True, _nrt=False, fastmath=SUMS)  # vectorised sums; it calls no kernel that would inherit them
+def posture_squares(L, ref, q):
+    """``|L (q - ref)|^2`` (``L`` (k, n), ``ref``, ``q`` (n,) [rad]): twice the posture's cost."""
     g2 = 0.0
     for i in range(L.shape[0]):
+        li = L[i]
         s = 0.0
         for d in range(q.shape[0]):
-            s += L[i, d] * (q[d] - ref[d])
+            s += li[d] * (q[d] - ref[d])
         g2 += s * s
-    costs[costs.shape[0] - 1] = 0.5 * g2
-    return converged, target, lagging
+    return g2
 
 
 @njit(cache=True, _nrt=False)
@@ -232,14 +239,22 @@ def linearise(task_model, tasks, posture, q, R, p, e, wk):
             wk.rows[i, d] = wk.J[r, d]
         wk.errors[i] = e[r]
         wk.weights[i] = tasks.packed_weight[i]
-    L, ref = posture.factor, posture.reference
+    posture_rows_into(posture.factor, posture.reference, posture.gain[0], q, mt, wk.rows, wk.errors, wk.weights)
+
+
+@njit(cache=True, _nrt=False, fastmath=SUMS)  # vectorised sums; it calls no kernel that would inherit them
+def posture_rows_into(L, ref, gain, q, at, rows, errors, weights):
+    """The posture's rows ``L`` (k, n) into ``rows`` from row ``at``, their errors ``gain L (ref - q)`` and weights
+    1."""
     for i in range(L.shape[0]):
+        li, row = L[i], rows[at + i]
         s = 0.0
-        for d in range(n):
-            wk.rows[mt + i, d] = L[i, d]
-            s += L[i, d] * (ref[d] - q[d])
-        wk.errors[mt + i] = posture.gain[0] * s
-        wk.weights[mt + i] = 1.0
+        for d in range(q.shape[0]):
+            s += li[d] * (ref[d] - q[d])
+        for d in range(q.shape[0]):
+            row[d] = li[d]
+        errors[at + i] = gain * s
+        weights[at + i] = 1.0
 
 
 @njit(cache=True, _nrt=False)

@@ -15,9 +15,8 @@ levels stacked, (M, n)) alone:
   ``C H^-1 C^T lam = C H^-1 b``, ``H = P + damping I``, ``b = L^T e - P dq``: the minimiser of the level's damped
   quadratic with ``C u = 0`` (``Z``'s orthonormal basis leaves ``|u| = |z|``).
 
-Dense dot products over rows of ``n``, no reflections: on bench_drag's drags the step's kernel took 5.9 / 6.5 /
-10.2 µs against the QR path's 15.1 / 13.4 / 12.8 (hands at 0, pins, studio; a script outside the repository timing
-both on the same packed levels). The normal equations square the rows' condition number, so they are taken only where
+Dense dot products over rows of ``n``, no reflections: on bench_drag's poses the step's kernel takes 6.2 / 9.6 µs
+against the QR path's 13.3 / 13.6 (pins, the studio's prior; ``benchmarks/bench_priority_pieces.py``). The normal equations square the rows' condition number, so they are taken only where
 it is provably small (:data:`CONDITIONED`). :func:`range_space_step` returns False, ``dq`` then undefined, and the
 caller steps by the QR path (the same step, rank decisions and active set its own) where:
 
@@ -29,7 +28,11 @@ caller steps by the QR path (the same step, rank decisions and active set its ow
   made once it holds and kept while it does), or a full one's share is not bounded: a solve()'s settle, whose
   steps swap the targets' curvature into the level, a matrix a step.
 
-The kernels allocate nothing (``_nrt=False``, as in :mod:`gsik.kernels.kinematics`).
+The kernels allocate nothing (``_nrt=False``, as in :mod:`gsik.kernels.kinematics`). Those that only sum (calling
+nothing outside this module but inlined helpers) sum as :func:`gsik.kernels.rows.dot_sum`
+(:data:`~gsik.kernels.rows.SUMS`: reassociated, so vectorised; the last bits follow the machine's vector width, the
+step is the same to rounding). The others keep exact IEEE order: numba compiles a callee that sets no ``fastmath``
+with its caller's, and a kernel shared with the QR or plain path must not change with whoever compiled it first.
 """
 
 from __future__ import annotations
@@ -42,7 +45,7 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.posture_level import bound_share, is_diagonal, prioritized_step_posture_in
-from gsik.kernels.rows import axpy1, dot, dot1
+from gsik.kernels.rows import SUMS, axpy1, dot_sum
 from gsik.kernels.step import copy_into
 
 #: A target level is solved here only when every pivot of its Cholesky factor is above this many times the QR's
@@ -102,17 +105,14 @@ def make_range_work(n_rows: int, n_dofs: int) -> RangeWork:
                      np.zeros((n, n)), np.full((n, n), np.nan), np.array([np.nan, UNSEEN, 0.0, 0.0, 0.0]))
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _forward(F, a, b, x):
     """``x[a:b] = F[a:b, a:b]^-1 x[a:b]`` (lower triangular)."""
     for i in range(a, b):
-        s = x[i]
-        for j in range(a, i):
-            s -= F[i, j] * x[j]
-        x[i] = s / F[i, i]
+        x[i] = (x[i] - dot_sum(F[i, a:i], x[a:i])) / F[i, i]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _backward(F, a, b, x):
     """``x[a:b] = F[a:b, a:b]^-T x[a:b]``."""
     for i in range(b - 1, a - 1, -1):
@@ -122,27 +122,22 @@ def _backward(F, a, b, x):
         x[i] = s / F[i, i]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _factor(A, a, b, least):
     """``A[a:b, a:b]`` (lower triangle read) replaced by its Cholesky factor; False if a pivot is not above
     ``least``."""
     for j in range(a, b):
-        d = A[j, j]
-        for k in range(a, j):
-            d -= A[j, k] * A[j, k]
+        d = A[j, j] - dot_sum(A[j, a:j], A[j, a:j])
         if not d > least * least:
             return False
         d = math.sqrt(d)
         A[j, j] = d
         for i in range(j + 1, b):
-            v = A[i, j]
-            for k in range(a, j):
-                v -= A[i, k] * A[j, k]
-            A[i, j] = v / d
+            A[i, j] = (A[i, j] - dot_sum(A[i, a:j], A[j, a:j])) / d
     return True
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _weigh(rows, errors, weights, start, stop, C, ce, at):
     """The level's rows ``start:stop`` weighted into ``C``, ``ce`` from row ``at``; returns ``(rows written, their
     largest norm)`` (rows of weight 0 left out: the QR ranks them out)."""
@@ -164,7 +159,7 @@ def _weigh(rows, errors, weights, start, stop, C, ce, at):
     return out, math.sqrt(scale)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _level(rw, a, b, dq, damping, pivot_least):
     """Level rows ``a:b`` of ``rw.C`` below rows ``0:a``: its block of the Gram factor ``rw.F`` and its damped step
     into ``rw.step`` (n,); False if its Schur complement is not well inside full rank."""
@@ -172,25 +167,20 @@ def _level(rw, a, b, dq, damping, pivot_least):
     n = dq.shape[0]
     for i in range(a, b):
         for j in range(i + 1):
-            F[i, j] = dot(C, i, C, j, 0, n)
+            F[i, j] = dot_sum(C[i], C[j])
     for i in range(a, b):  # F[a:b, :a] = K[a:b, :a] F[:a, :a]^-T, row by row
         for j in range(a):
-            s = F[i, j]
-            for k in range(j):
-                s -= F[i, k] * F[j, k]
-            F[i, j] = s / F[j, j]
+            F[i, j] = (F[i, j] - dot_sum(F[i, :j], F[j, :j])) / F[j, j]
     for i in range(a, b):  # the Schur complement, and its damped copy
         for j in range(a, i + 1):
-            s = F[i, j]
-            for k in range(a):
-                s -= F[i, k] * F[j, k]
+            s = F[i, j] - dot_sum(F[i, :a], F[j, :a])
             F[i, j] = s
             D[i, j] = s
         D[i, i] += damping
     if not _factor(F, a, b, pivot_least) or not _factor(D, a, b, 0.0):
         return False
     for i in range(a, b):
-        y[i] = rw.ce[i] - dot1(C, i, dq, 0, n)
+        y[i] = rw.ce[i] - dot_sum(C[i], dq)
     _forward(D, a, b, y)
     _backward(D, a, b, y)
     # u = C_l^T y - C_a^T K_a^-1 K_al y; K_al y = F_a (F_la^T y): t = F_la^T y, then F_a^-T t
@@ -210,18 +200,25 @@ def _level(rw, a, b, dq, damping, pivot_least):
     return True
 
 
-@njit(cache=True, _nrt=False)
-def _conditioned(F, m, x, least):
-    """True if ``1 / trace(K^-1) >= least^2`` for ``K = F F^T`` (``F`` (m, m) lower triangular, ``x`` (m,) scratch):
-    ``trace(K^-1) = |F^-1|_F^2`` (its columns by forward substitution) bounds ``1 / lambda_min(K)`` from above."""
+@njit(cache=True, _nrt=False, fastmath=SUMS)
+def _conditioned(F, m, X, least):
+    """True if ``1 / trace(K^-1) >= least^2`` for ``K = F F^T`` (``F`` (m, m) lower triangular, ``X`` (m, m)
+    scratch): ``trace(K^-1) = |F^-1|_F^2`` bounds ``1 / lambda_min(K)`` from above. ``F^-1`` is made row by row,
+    ``X[i] = (e_i - F[i, :i] X[:i]) / F[i, i]`` (sweeps over rows, which vectorise; the columns' substitutions are
+    chains of dependent short sums)."""
     total = 0.0
-    for j in range(m):
-        for i in range(j, m):
-            v = 1.0 if i == j else 0.0
-            for k in range(j, i):
-                v -= F[i, k] * x[k]
-            x[i] = v / F[i, i]
-            total += x[i] * x[i]
+    for i in range(m):
+        xi = X[i]
+        xi[:m] = 0.0
+        xi[i] = 1.0
+        for k in range(i):
+            f, xk = F[i, k], X[k]
+            for c in range(k + 1):
+                xi[c] -= f * xk[c]
+        r = 1.0 / F[i, i]
+        for c in range(i + 1):
+            xi[c] *= r
+            total += xi[c] * xi[c]
     return total * least * least <= 1.0
 
 
@@ -263,7 +260,7 @@ def _posture_kind(rw, P, damping, invert):
     return st[S_KIND]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _invert(rw, P, damping):
     """``rw.Hinv = (P + damping I)^-1`` (n, n), by its Cholesky factor (in ``rw.Hf``); False if not positive
     definite."""
@@ -284,19 +281,19 @@ def _invert(rw, P, damping):
     return True
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _posture_rhs(rows, errors, start, stop, P, dq, hb):
     """``hb = L^T e - P dq`` (n,): the posture level's right-hand side (its rows ``start:stop`` are ``L``, weights
     1)."""
     n = dq.shape[0]
     for d in range(n):
-        hb[d] = -dot1(P, d, dq, 0, n)
+        hb[d] = -dot_sum(P[d], dq)
     for i in range(start, stop):
         if errors[i] != 0.0:
             axpy1(hb, errors[i], rows, i, 0, n)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _posture_full(rw, m, rows, errors, start, stop, P, dq):
     """The posture's step with the target rows ``rw.C[:m]`` held, ``rw.Hinv`` its damped inverse, into
     ``rw.step``; False if ``C H^-1 C^T`` is not positive definite."""
@@ -315,8 +312,8 @@ def _posture_full(rw, m, rows, errors, start, stop, P, dq):
             if C[i, d] != 0.0:
                 axpy1(yi, C[i, d], Hinv, d, 0, n)
         for j in range(i + 1):
-            G[i, j] = dot(Y, i, C, j, 0, n)
-        lam[i] = dot1(C, i, hb, 0, n)
+            G[i, j] = dot_sum(Y[i], C[j])
+        lam[i] = dot_sum(C[i], hb)
     if not _factor(G, 0, m, 0.0):
         return False
     _forward(G, 0, m, lam)
@@ -328,7 +325,7 @@ def _posture_full(rw, m, rows, errors, start, stop, P, dq):
     return True
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=SUMS)
 def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
     """The posture's step for a diagonal ``P`` (``H^-1`` a scaling) with the target rows ``rw.C[:m]`` held, into
     ``rw.step``; False if ``C H^-1 C^T`` is not positive definite. A uniform one's ``C H^-1 C^T`` is the Gram
@@ -344,7 +341,7 @@ def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
     for d in range(n):
         hb[d] *= h[d]
     for i in range(m):
-        lam[i] = dot1(C, i, hb, 0, n)
+        lam[i] = dot_sum(C[i], hb)
     # uniform: C H^-1 C^T = K / (P_00 + damping), lam = K^-1 C H^-1 b (H^-1 b in hb), the Gram factor's and C's
     F, CH = (rw.F, C) if uniform else (G, Y)
     if not uniform:
@@ -353,7 +350,7 @@ def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
             for d in range(n):
                 yi[d] = ci[d] * h[d]
             for j in range(i + 1):
-                G[i, j] = dot(Y, i, C, j, 0, n)
+                G[i, j] = dot_sum(Y[i], C[j])
         if not _factor(G, 0, m, 0.0):
             return False
     _forward(F, 0, m, lam)
@@ -395,7 +392,7 @@ def range_space_step(rw, rows, errors, weights, starts, dampings, lo, hi, rank_t
         if not (_level(rw, a, m, dq, dampings[lv], RANK_MARGIN * rank_tol * scale)
                 and _take(dq, rw.step, lo, hi, box_tol, box_rel_tol)):
             return False
-    if not _conditioned(rw.F, m, rw.t, CONDITIONED * top):
+    if not _conditioned(rw.F, m, rw.D, CONDITIONED * top):  # D: free once the levels are solved
         return False
     copy_into(below, dq)
     priority._into_box(dq, lo, hi, box_tol)

@@ -10,6 +10,12 @@ from __future__ import annotations
 
 from gsik._jit import njit
 
+#: The floating-point freedom of :func:`dot_sum` and the kernels that sum as it does: sums reassociated (LLVM
+#: vectorises the reduction) and multiplies fused into adds. Nothing is assumed about NaN or infinity, so the
+#: kernels' finiteness checks hold. Only for kernels that call no other module's kernel: numba compiles a callee
+#: that sets no ``fastmath`` with its caller's, so a shared kernel would round as whoever compiled it first.
+SUMS = {"reassoc", "contract"}
+
 
 @njit(cache=True, inline="always")
 def dot1(X, i, x, start, stop):
@@ -40,6 +46,17 @@ def dot_views(a, b):
     for d in range(n - n % 4, n):
         s0 += a[d] * b[d]
     return (s0 + s1) + (s2 + s3)
+
+
+@njit(cache=True, inline="always", fastmath=SUMS)
+def dot_sum(a, b):
+    """``a @ b`` ((n,) views) as one plain sum, which :data:`SUMS` lets LLVM vectorise: ~2.5x faster than
+    :func:`dot_views` at 30 in a kernel compiled with :data:`SUMS` (the four sums keep LLVM from vectorising);
+    the last bits depend on the machine's vector width."""
+    s = 0.0
+    for d in range(a.shape[0]):
+        s += a[d] * b[d]
+    return s
 
 
 @njit(cache=True, inline="always")
