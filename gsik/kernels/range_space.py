@@ -15,10 +15,12 @@ levels stacked, (M, n)) alone:
   ``C H^-1 C^T lam = C H^-1 b``, ``H = P + damping I``, ``b = L^T e - P dq``: the minimiser of the level's damped
   quadratic with ``C u = 0`` (``Z``'s orthonormal basis leaves ``|u| = |z|``).
 
-Dense dot products over rows of ``n``, no reflections: on bench_drag's poses the step's kernel takes 6.2 / 9.6 µs
-against the QR path's 13.3 / 13.6 (pins, the studio's prior; ``benchmarks/bench_priority_pieces.py``). The normal equations square the rows' condition number, so they are taken only where
-it is provably small (:data:`CONDITIONED`). :func:`range_space_step` returns False, ``dq`` then undefined, and the
-caller steps by the QR path (the same step, rank decisions and active set its own) where:
+Dense dot products over rows of ``n`` and weighted sums of rows (:func:`gsik.kernels.vector.combine_rows`, its
+sums in registers), no reflections: on bench_drag's poses the step's kernel takes 5.3 / 7.3 µs against the QR
+path's 13.0 / 13.3 (pins, the studio's prior; ``benchmarks/bench_priority_pieces.py``). The normal equations
+square the rows' condition number, so they are taken only where it is provably small (:data:`CONDITIONED`).
+:func:`range_space_step` returns False, ``dq`` then undefined, and the caller steps by the QR path (the same
+step, rank decisions and active set its own) where:
 
 - a level's Cholesky pivot falls below :data:`RANK_MARGIN` times the QR's rank tolerance (it may be
   rank-deficient: the QR decides the rank), or the target rows are not :data:`CONDITIONED`;
@@ -45,8 +47,9 @@ import numpy as np
 from gsik._jit import njit
 from gsik.kernels import priority
 from gsik.kernels.posture_level import bound_share, is_diagonal, prioritized_step_posture_in
-from gsik.kernels.rows import SUMS, axpy1, dot_sum
+from gsik.kernels.rows import SUMS, dot_sum
 from gsik.kernels.step import copy_into
+from gsik.kernels.vector import combine_rows
 
 #: A target level is solved here only when every pivot of its Cholesky factor is above this many times the QR's
 #: pivot tolerance (``rank_tol`` times its largest row norm): well inside full rank, where the QR finds it too.
@@ -164,12 +167,13 @@ def _level(rw, a, b, dq, damping, pivot_least):
     """Level rows ``a:b`` of ``rw.C`` below rows ``0:a``: its block of the Gram factor ``rw.F`` and its damped step
     into ``rw.step`` (n,); False if its Schur complement is not well inside full rank."""
     C, F, D, y = rw.C, rw.F, rw.D, rw.y
-    n = dq.shape[0]
     for i in range(a, b):
         for j in range(i + 1):
             F[i, j] = dot_sum(C[i], C[j])
-    for i in range(a, b):  # F[a:b, :a] = K[a:b, :a] F[:a, :a]^-T, row by row
-        for j in range(a):
+    # F[a:b, :a] = K[a:b, :a] F[:a, :a]^-T, column by column: the rows' substitutions are independent, so their
+    # divisions overlap (row by row, each waited on the last: the same numbers, ~0.1 µs a row slower)
+    for j in range(a):
+        for i in range(a, b):
             F[i, j] = (F[i, j] - dot_sum(F[i, :j], F[j, :j])) / F[j, j]
     for i in range(a, b):  # the Schur complement, and its damped copy
         for j in range(a, i + 1):
@@ -193,31 +197,38 @@ def _level(rw, a, b, dq, damping, pivot_least):
     _backward(F, 0, a, t)
     step = rw.step
     step[:] = 0.0
-    for i in range(a, b):
-        axpy1(step, y[i], C, i, 0, n)
+    combine_rows(y[a:b], C[a:b], step)
     for j in range(a):
-        axpy1(step, -t[j], C, j, 0, n)
+        t[j] = -t[j]
+    combine_rows(t[:a], C[:a], step)
     return True
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _subtract_rows(lam, X, m, out):
+    """``out -= lam[:m] @ X[:m]`` (``lam`` negated in place)."""
+    for i in range(m):
+        lam[i] = -lam[i]
+    combine_rows(lam[:m], X[:m], out)
 
 
 @njit(cache=True, _nrt=False, fastmath=SUMS)
 def _conditioned(F, m, X, least):
     """True if ``1 / trace(K^-1) >= least^2`` for ``K = F F^T`` (``F`` (m, m) lower triangular, ``X`` (m, m)
     scratch): ``trace(K^-1) = |F^-1|_F^2`` bounds ``1 / lambda_min(K)`` from above. ``F^-1`` is made row by row,
-    ``X[i] = (e_i - F[i, :i] X[:i]) / F[i, i]`` (sweeps over rows, which vectorise; the columns' substitutions are
-    chains of dependent short sums)."""
+    ``X[i] = (e_i - F[i, :i] X[:i]) / F[i, i]`` (a weighted sum of rows, :func:`combine_rows`; the columns'
+    substitutions are chains of dependent short sums). The sum is negated after it is made, not as it is made: both
+    round alike."""
     total = 0.0
     for i in range(m):
         xi = X[i]
         xi[:m] = 0.0
-        xi[i] = 1.0
-        for k in range(i):
-            f, xk = F[i, k], X[k]
-            for c in range(k + 1):
-                xi[c] -= f * xk[c]
+        combine_rows(F[i, :i], X[:i], xi[:i])
         r = 1.0 / F[i, i]
-        for c in range(i + 1):
-            xi[c] *= r
+        xi[i] = r
+        total += r * r
+        for c in range(i):
+            xi[c] = -xi[c] * r
             total += xi[c] * xi[c]
     return total * least * least <= 1.0
 
@@ -288,9 +299,7 @@ def _posture_rhs(rows, errors, start, stop, P, dq, hb):
     n = dq.shape[0]
     for d in range(n):
         hb[d] = -dot_sum(P[d], dq)
-    for i in range(start, stop):
-        if errors[i] != 0.0:
-            axpy1(hb, errors[i], rows, i, 0, n)
+    combine_rows(errors[start:stop], rows[start:stop], hb)
 
 
 @njit(cache=True, _nrt=False, fastmath=SUMS)
@@ -302,15 +311,11 @@ def _posture_full(rw, m, rows, errors, start, stop, P, dq):
     step = rw.step
     _posture_rhs(rows, errors, start, stop, P, dq, step)
     hb[:] = 0.0
-    for d in range(n):  # hb = H^-1 b, by rows of the symmetric H^-1
-        if step[d] != 0.0:
-            axpy1(hb, step[d], Hinv, d, 0, n)
+    combine_rows(step, Hinv, hb)  # hb = H^-1 b, by rows of the symmetric H^-1
     for i in range(m):  # Y = C H^-1, G = C H^-1 C^T (lower), lam = C H^-1 b
         yi = Y[i]
         yi[:] = 0.0
-        for d in range(n):
-            if C[i, d] != 0.0:
-                axpy1(yi, C[i, d], Hinv, d, 0, n)
+        combine_rows(C[i], Hinv, yi)
         for j in range(i + 1):
             G[i, j] = dot_sum(Y[i], C[j])
         lam[i] = dot_sum(C[i], hb)
@@ -320,8 +325,7 @@ def _posture_full(rw, m, rows, errors, start, stop, P, dq):
     _backward(G, 0, m, lam)
     for d in range(n):
         step[d] = hb[d]
-    for i in range(m):
-        axpy1(step, -lam[i], Y, i, 0, n)
+    _subtract_rows(lam, Y, m, step)
     return True
 
 
@@ -358,8 +362,7 @@ def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
     step = rw.step
     for d in range(n):
         step[d] = hb[d]
-    for i in range(m):
-        axpy1(step, -lam[i], CH, i, 0, n)
+    _subtract_rows(lam, CH, m, step)
     return True
 
 
