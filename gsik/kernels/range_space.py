@@ -162,6 +162,14 @@ def _weigh(rows, errors, weights, start, stop, C, ce, at):
     return out, math.sqrt(scale)
 
 
+@njit(cache=True, _nrt=False, inline="always")
+def _subtract_rows(lam, X, m, out):
+    """``out -= lam[:m] @ X[:m]`` (``lam`` negated in place)."""
+    for i in range(m):
+        lam[i] = -lam[i]
+    combine_rows(lam[:m], X[:m], out)
+
+
 @njit(cache=True, _nrt=False, fastmath=SUMS)
 def _level(rw, a, b, dq, damping, pivot_least):
     """Level rows ``a:b`` of ``rw.C`` below rows ``0:a``: its block of the Gram factor ``rw.F`` and its damped step
@@ -198,18 +206,8 @@ def _level(rw, a, b, dq, damping, pivot_least):
     step = rw.step
     step[:] = 0.0
     combine_rows(y[a:b], C[a:b], step)
-    for j in range(a):
-        t[j] = -t[j]
-    combine_rows(t[:a], C[:a], step)
+    _subtract_rows(t, C, a, step)
     return True
-
-
-@njit(cache=True, _nrt=False, inline="always")
-def _subtract_rows(lam, X, m, out):
-    """``out -= lam[:m] @ X[:m]`` (``lam`` negated in place)."""
-    for i in range(m):
-        lam[i] = -lam[i]
-    combine_rows(lam[:m], X[:m], out)
 
 
 @njit(cache=True, _nrt=False, fastmath=SUMS)

@@ -43,8 +43,10 @@ if intrinsic is not None:
     _I64, _I32 = ir.IntType(64), ir.IntType(32)
     _VEC, _MASK = ir.VectorType(_F64, LANES), ir.VectorType(ir.IntType(1), LANES)
 
-    def _contiguous(a, ndim):
-        return isinstance(a, types.Array) and a.ndim == ndim and a.dtype == types.float64 and a.layout == "C"
+    def _readable(w, X, out):
+        """True if ``w``, ``X``, ``out`` are the float arrays (1-d, 2-d, 1-d) C-contiguous that the loop reads."""
+        return all(isinstance(a, types.Array) and a.ndim == ndim and a.dtype == types.float64 and a.layout == "C"
+                   for a, ndim in ((w, 1), (X, 2), (out, 1)))
 
     def _splat(builder, value, typ):
         """``value`` in every lane."""
@@ -68,13 +70,12 @@ if intrinsic is not None:
         load, store, fmuladd = functions
         ptr, align, zero = ir.PointerType(_F64), ir.Constant(_I32, 8), ir.Constant(_VEC, [0.0] * LANES)
         lanes = ir.Constant(ir.VectorType(_I64, LANES), list(range(LANES)))
-        masks, targets = [], []
+        columns = [builder.add(start, ir.Constant(_I64, LANES * r)) for r in range(REGISTERS)]
+        masks = [builder.icmp_unsigned("<", builder.add(_splat(builder, c, _I64), lanes), _splat(builder, m, _I64))
+                 for c in columns]
+        targets = [builder.gep(out.data, [c]) for c in columns]
         for r, acc in enumerate(accumulators):
-            column = builder.add(start, ir.Constant(_I64, LANES * r))
-            masks.append(builder.icmp_unsigned("<", builder.add(_splat(builder, column, _I64), lanes),
-                                               _splat(builder, m, _I64)))
-            targets.append(builder.gep(out.data, [column]))
-            builder.store(builder.call(load, [targets[-1], align, masks[-1], zero]), acc)
+            builder.store(builder.call(load, [targets[r], align, masks[r], zero]), acc)
         k = cgutils.unpack_tuple(builder, w.shape, 1)[0]
         row_bytes = cgutils.unpack_tuple(builder, X.strides, 2)[0]
         with cgutils.for_range(builder, k) as row:
@@ -84,8 +85,7 @@ if intrinsic is not None:
                 base = builder.inttoptr(builder.add(builder.ptrtoint(X.data, _I64), builder.mul(row.index, row_bytes)),
                                         ptr)
                 for r, acc in enumerate(accumulators):
-                    x = builder.call(load, [builder.gep(base, [builder.add(start, ir.Constant(_I64, LANES * r))]),
-                                            align, masks[r], zero])
+                    x = builder.call(load, [builder.gep(base, [columns[r]]), align, masks[r], zero])
                     builder.store(builder.call(fmuladd, [weights, x, builder.load(acc)]), acc)
         for r, acc in enumerate(accumulators):
             builder.call(store, [builder.load(acc), targets[r], align, masks[r]])
@@ -93,8 +93,8 @@ if intrinsic is not None:
     @intrinsic
     def _combine_rows(typingctx, w, X, out):
         """:func:`combine_rows` in LLVM IR (the accumulators are stack slots that LLVM promotes to registers)."""
-        if not (_contiguous(w, 1) and _contiguous(X, 2) and _contiguous(out, 1)):
-            return None
+        if not _readable(w, X, out):
+            return None  # numba's typing error: no compiled code, rather than wrong sums
         signature = types.void(w, X, out)
 
         def codegen(context, builder, sig, args):
@@ -113,6 +113,6 @@ if intrinsic is not None:
 
     @overload(combine_rows, inline="always")
     def _combine_rows_overload(w, X, out):
-        if _contiguous(w, 1) and _contiguous(X, 2) and _contiguous(out, 1):
+        if _readable(w, X, out):
             return lambda w, X, out: _combine_rows(w, X, out)
         return None
