@@ -105,7 +105,7 @@ def _pieces(solver, repeat: int) -> dict[str, float | tuple[int, int]]:
             _priority_loop, repeat, wk.priority, *packed, tasks.starts[:levels + 1], wk.dampings[:levels], wk.lo,
             wk.hi, c._tols, dq)
     rows = c._posture_rows
-    rw = range_space.make_range_work(wk.range_work.C.shape[0], q.shape[0])  # its own: the drag's counts stay
+    rw = range_space.make_range_work(wk.range_work.F.shape[0], q.shape[0])  # its own: the drag's counts stay
     out["the step's kernel, all levels"] = _cpu_us(_range_loop, repeat, rw, wk.priority, *packed, tasks.starts,
                                                     wk.dampings, wk.lo, wk.hi, c._tols, rows.normal, rows.share[0],
                                                     dq, wk.below)

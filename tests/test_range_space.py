@@ -1,6 +1,7 @@
 """The strict-priority step by its normal equations (gsik.kernels.range_space): where it takes the step it is the
 pivoted QR path's to rounding, and it leaves to that path what it cannot take exactly (a rank-deficient or
-ill-conditioned level, a DOF meeting its bound, a posture not seen twice); the controller's drag takes it."""
+ill-conditioned level, a target level meeting the box, a posture locking more DOFs than it holds, a posture not seen
+twice); the controller's drag takes it."""
 
 import numpy as np
 import pytest
@@ -10,7 +11,7 @@ from test_posture_level import _diagonal_factor, _full_factor, posture_problems
 
 from gsik.kernels import priority as priority_kernel
 from gsik.kernels import range_space as rs
-from gsik.kernels.posture_level import normal_matrix, prioritized_step_posture
+from gsik.kernels.posture_level import normal_matrix, prioritized_step_posture, prioritized_step_posture_in
 from gsik.priority import (BOX_RELATIVE_TOLERANCE, BOX_TOLERANCE, RANK_TOLERANCE, Level, factor_level, pack_levels,
                            prioritized_step_svd)
 
@@ -51,10 +52,12 @@ def _pins_and_hands(rng, n=30, factor=None, width=1.0):
 
 
 @settings(max_examples=300, deadline=None)
-@given(posture_problems())
-def test_the_step_is_the_pivoted_qr_step_and_the_svd_reference_whichever_path_takes_it(problem):
+@given(posture_problems(), st.sampled_from([0.0, 10.0]))
+def test_the_step_is_the_pivoted_qr_step_and_the_svd_reference_whichever_path_takes_it(problem, bound):
+    """Boxes from roomy to tight enough that the posture's level locks DOFs; a full posture inverted where its share
+    is bounded (a bound of 10 rad leaves these steps whole, the SVD reference's)."""
     levels, lo, hi, dampings, normal = problem
-    dq, _, qr = _both(levels, lo, hi, dampings, normal)
+    dq, _, qr = _both(levels, lo, hi, dampings, normal, bound)
     assert np.all(dq >= lo) and np.all(dq <= hi)
     np.testing.assert_allclose(dq, qr, rtol=0.0, atol=1e-9)
     np.testing.assert_allclose(dq, prioritized_step_svd(levels, lo, hi, dampings), rtol=0.0, atol=1e-8)
@@ -78,7 +81,7 @@ def test_what_it_cannot_take_exactly_it_leaves_to_the_qr_path(rng):
     dampings = [1e-6, 1e-6, 1e-3]
     _, taken, _ = _both(levels, lo, hi, dampings, normal, bound=10.0, calls=1)
     assert not taken  # a posture seen once: the next step may bring another (a settle's curvature), not inverted
-    tight = np.full(n, 1e-4)  # the posture's step meets the box: the QR's active set locks DOFs
+    tight = np.full(n, 1e-4)  # the target levels' steps meet the box: the QR's active set locks DOFs
     dq, taken, qr = _both(levels, -tight, tight, dampings, normal, bound=10.0)
     assert not taken
     np.testing.assert_array_equal(dq, qr)
@@ -93,6 +96,35 @@ def test_what_it_cannot_take_exactly_it_leaves_to_the_qr_path(rng):
     dq, taken, qr = _both(close, lo, hi, dampings, normal, bound=10.0)
     assert not taken
     np.testing.assert_array_equal(dq, qr)
+
+
+@pytest.mark.parametrize("kind", ["full", "diagonal", "uniform"])
+def test_the_posture_s_level_locks_dofs_at_the_box_as_the_qr_s_active_set_does(rng, kind):
+    """DOFs only the posture moves, boxed short of its step one more at a time: up to LOCKS locked DOFs the normal
+    equations take the step, each DOF where the QR's active set locks it; past that the QR path does."""
+    n = 30
+    factor = {"full": lambda: _full_factor(rng, n), "diagonal": lambda: _diagonal_factor(rng, n),
+              "uniform": lambda: np.eye(n)}[kind]()
+    levels, lo, hi, normal = _pins_and_hands(rng, n, factor)
+    rows, errors, weights, starts = pack_levels(levels, n)
+    dampings = np.array([1e-6, 1e-6, 1e-3])
+    free, _, _ = _both(levels, lo, hi, dampings, normal, bound=10.0)
+    own = 24 + np.argsort(-np.abs(free[24:]))  # the DOFs no target row moves, the posture's longest moves first
+    locks_seen = set()
+    for k in range(1, 7):
+        box_lo, box_hi = lo.copy(), hi.copy()
+        for d in own[:k]:  # each boxed at a third of its free move: it blocks
+            box_lo[d], box_hi[d] = min(free[d] / 3.0, 0.0), max(free[d] / 3.0, 0.0)
+        dq, taken, qr = _both(levels, box_lo, box_hi, dampings, normal, bound=10.0)
+        wk = priority_kernel.make_work(n, int(priority_kernel.largest_level(starts, 3)))
+        prioritized_step_posture_in(wk, rows, errors, weights, starts, dampings, box_lo, box_hi, *TOLS, normal, 10.0,
+                                    np.zeros(n), np.zeros(n))
+        locks = int(wk.locked.sum())  # the QR's active set
+        locks_seen.add(locks)
+        assert taken == (1 <= locks <= rs.LOCKS)
+        np.testing.assert_allclose(dq, qr, rtol=0.0, atol=1e-11)
+        assert np.sum((dq == box_lo) | (dq == box_hi)) >= locks
+    assert {1, rs.LOCKS, rs.LOCKS + 1} <= locks_seen  # one lock, the most held, one more: the QR's
 
 
 def test_a_posture_that_changes_is_inverted_again_only_once_it_holds(rng):

@@ -40,6 +40,8 @@ if AVAILABLE:
     from numba.core import types
     from numba.experimental import structref
 
+    from gsik.kernels.borrow import borrow
+
     @structref.register
     class FrameInputsType(types.StructRef):
         """The numba type of a :class:`FrameInputs`: its fields' types as given (no literals)."""
@@ -72,11 +74,18 @@ if AVAILABLE:
         last step (``code`` :data:`STEPPED`, :data:`DECLINED` or :data:`NOT_FINITE`); ``step_norm`` [rad] is the
         whole change of the angles, ``finite`` whether their squares' sum is, ``errors_left`` whether the reported
         errors are those the last step left (committed)."""
-        s = f.step
-        cache, window = s.cache, s.window
+        return _frame(f, flags)
+
+    @njit(cache=True, _nrt=False)
+    def _frame(f, flags):
+        """:func:`frame_step`'s frame, the fields of ``f`` and its step inputs read without reference counting
+        (:func:`gsik.kernels.borrow.borrow`)."""
+        s = borrow(f, "step")
+        cache, window = borrow(s, "cache"), borrow(s, "window")
         rest = (flags & REST) != 0
         if flags & GATHER:
-            code = gather.gather_targets(f.position, f.rotation, f.row_weight, f.rows, f.tp, f.tR, f.row_w,
+            code = gather.gather_targets(borrow(f, "position"), borrow(f, "rotation"), borrow(f, "row_weight"),
+                                         borrow(f, "rows"), borrow(f, "tp"), borrow(f, "tR"), borrow(f, "row_w"),
                                          cache.flags, window.ring)
             if code == gather.DECLINED or (code == gather.SAME and (flags & HELD) != 0):
                 return DECLINED, 0, False, False, False, 0.0, False, 0.0, False, False
@@ -84,35 +93,40 @@ if AVAILABLE:
                 rest = (flags & LAST_HELD) != 0
         elif flags & HELD:
             return DECLINED, 0, False, False, False, 0.0, False, 0.0, False, False
-        q, W, R, p, lam = f.q, f.W, f.R, f.p, f.lam
-        f.q_before[:] = q
+        q, W, R, p, lam = borrow(f, "q"), borrow(f, "W"), borrow(f, "R"), borrow(f, "p"), borrow(f, "lam")
+        q_before, posture_on = borrow(f, "q_before"), borrow(f, "posture_on")
+        for d in range(q.shape[0]):
+            q_before[d] = q[d]
         if rest:
-            lam[0] = s.base
+            lam[0] = borrow(s, "base")
         steps = 0
         accepted = held = converged = lagging = committed = False
         cost = step_norm = 0.0
-        for steps in range(1, f.tracking_steps + 1):
-            end = step_inputs.control_step(s, W, q, R, p, lam, lam[0])
+        for steps in range(1, borrow(f, "tracking_steps") + 1):
+            end = step_inputs.control_step_in(s, W, q, R, p, lam, lam[0])
             if end[0] != priority.OK:
                 return NOT_FINITE, steps, False, False, False, 0.0, False, 0.0, False, False
             committed = end[1] > 0.0
             converged, cost, lagging = end[3] > 0.0, end[4], end[5] > 0.0
-            accepted, held, step_norm = step_inputs.judged(s, end, f.posture_on)
+            accepted, held, step_norm = step_inputs.judged_in(s, end, posture_on)
             if not lagging or held or not accepted:
                 break
         # Not converged while the posture's share of a step is bounded: it has further to go (Solver._control_step)
-        converged = converged and not share_bounded(s.posture, s.wk)
+        wk = borrow(s, "wk")
+        converged = converged and not share_bounded(borrow(s, "posture"), wk)
         if steps > 1:
+            diff = borrow(f, "diff")
             for d in range(q.shape[0]):
-                f.diff[d] = q[d] - f.q_before[d]
-            step_norm = norm(f.diff)
-        n, values = q.shape[0], f.values
+                diff[d] = q[d] - q_before[d]
+            step_norm = norm(diff)
+        n, values = q.shape[0], borrow(f, "values")
         if committed:
-            squares = gather.gather_result(q, s.wk.err, f.used, values)
+            squares = gather.gather_result(q, wk.err, borrow(f, "used"), values)
         else:
             squares = 0.0
             for d in range(n):
                 values[d] = q[d]
                 squares += q[d] * q[d]
-            ck.report_errors(R, p, s.tasks, f.index, f.e, f.err, f.M, f.reported)
+            ck.report_errors(R, p, borrow(s, "tasks"), borrow(f, "index"), borrow(f, "e"), borrow(f, "err"),
+                             borrow(f, "M"), borrow(f, "reported"))
         return STEPPED, steps, accepted, held, converged, cost, lagging, step_norm, math.isfinite(squares), committed

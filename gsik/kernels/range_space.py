@@ -24,11 +24,13 @@ step, rank decisions and active set its own) where:
 
 - a level's Cholesky pivot falls below :data:`RANK_MARGIN` times the QR's rank tolerance (it may be
   rank-deficient: the QR decides the rank), or the target rows are not :data:`CONDITIONED`;
-- a level's step would meet the box (a DOF at its bound: the QR's active set locks it);
+- a target level's step would meet the box (a DOF at its bound: the QR's active set locks it), or the posture's
+  would lock more than :data:`~gsik.kernels.range_posture.LOCKS` DOFs (fewer are locked here as the QR locks them:
+  :func:`~gsik.kernels.range_posture.posture_box`);
 - a number is not finite;
-- the posture's matrix or damping is not the last call's (:func:`_posture_kind`: a full one's damped inverse is
-  made once it holds and kept while it does), or a full one's share is not bounded: a solve()'s settle, whose
-  steps swap the targets' curvature into the level, a matrix a step.
+- the posture's matrix or damping is not the last call's (:func:`~gsik.kernels.range_posture.posture_kind`: a
+  full one's damped inverse is made once it holds and kept while it does), or a full one's share is not bounded:
+  a solve()'s settle, whose steps swap the targets' curvature into the level, a matrix a step.
 
 The kernels allocate nothing (``_nrt=False``, as in :mod:`gsik.kernels.kinematics`). Those that only sum (calling
 nothing outside this module but inlined helpers) sum as :func:`gsik.kernels.rows.dot_sum`
@@ -45,11 +47,16 @@ from typing import NamedTuple
 import numpy as np
 
 from gsik._jit import njit
-from gsik.kernels import priority
-from gsik.kernels.posture_level import bound_share, is_diagonal, prioritized_step_posture_in
+from gsik.kernels import priority, range_posture
+from gsik.kernels.posture_level import bound_share, prioritized_step_posture_in
+from gsik.kernels.range_posture import DIAGONAL, LOCKS, S_DECLINED, S_INVERTED, S_TAKEN, UNSEEN
 from gsik.kernels.rows import SUMS, dot_sum
 from gsik.kernels.step import copy_into
-from gsik.kernels.vector import combine_rows
+from gsik.kernels.triangular import backward, factor, forward
+from gsik.kernels.vector import combine_rows, subtract_rows
+
+__all__ = ["CONDITIONED", "RANK_MARGIN", "S_DECLINED", "S_INVERTED", "S_TAKEN", "RangeWork", "make_range_work",
+           "prioritized_step_range_in", "range_space_step"]
 
 #: A target level is solved here only when every pivot of its Cholesky factor is above this many times the QR's
 #: pivot tolerance (``rank_tol`` times its largest row norm): well inside full rank, where the QR finds it too.
@@ -65,13 +72,17 @@ class RangeWork(NamedTuple):
     """:func:`range_space_step`'s buffers, for ``M`` target rows and ``n`` DOFs (:func:`make_range_work`).
 
     Attributes:
-        C: (M, n) the weighted target rows, level by level. ce: (M,) their weighted errors.
+        C: (M + LOCKS, n) the weighted target rows, level by level, then the posture's locked DOFs' unit rows.
+        ce: (M,) the target rows' weighted errors.
         F: (M, M) the Gram matrix's block Cholesky factor (lower; row ``i`` to column ``i``).
-        D: (M, M) a level's damped Schur complement, factored. Y: (M, n) ``C H^-1`` (the posture's level).
-        G: (M, M) ``C H^-1 C^T``, factored. y, t: (M,). step, hb: (n,). Hf: (n, n) scratch (a diagonal ``H^-1`` in
+        D: (M, M) a level's damped Schur complement, factored. Y: (M + LOCKS, n) ``C H^-1`` (the posture's level).
+        G: (M + LOCKS, M + LOCKS) ``C H^-1 C^T``, factored. y: (M + LOCKS,). t: (M,). step, hb: (n,).
+        Hf: (n, n) scratch (a diagonal ``H^-1`` in
         its first row; ``H``'s Cholesky factor while inverting it).
         Hinv: (n, n) ``H^-1 = (P + damping I)^-1`` of a full posture, kept while ``P`` and the damping stay.
-        key: (n, n) the ``P`` last seen. state: (5,) :data:`S_DAMPING` ...
+        key: (n, n) the ``P`` last seen. state: (5,)
+        :data:`gsik.kernels.range_posture.S_DAMPING` ... locked: (LOCKS,) the DOFs the posture's level locked, in
+        order (:data:`~gsik.kernels.range_posture.LOCKS`).
     """
 
     C: np.ndarray
@@ -88,56 +99,18 @@ class RangeWork(NamedTuple):
     Hinv: np.ndarray
     key: np.ndarray
     state: np.ndarray
+    locked: np.ndarray
 
 
-#: Where :attr:`RangeWork.state` holds: the damping ``Hinv`` and the posture's kind were made for; the kind
-#: (:data:`UNSEEN`, :data:`DIAGONAL`, :data:`FULL`); whether ``Hinv`` holds that full posture's inverse (1/0); the
-#: steps :func:`prioritized_step_range_in` made here and those it left to the QR path (counts, for benchmarks and
-#: tests).
-S_DAMPING, S_KIND, S_INVERTED, S_TAKEN, S_DECLINED = range(5)
-#: A posture's kind: ``key`` not seen twice in a row yet (the QR path steps: a matrix that changes every step, the
-#: targets' curvature in a settle, is never inverted); diagonal (``H^-1`` a scaling); full (``Hinv`` kept).
-UNSEEN, DIAGONAL, FULL = 0.0, 1.0, 2.0
 
 
 def make_range_work(n_rows: int, n_dofs: int) -> RangeWork:
     """A :class:`RangeWork` for ``n_rows`` target rows and ``n_dofs`` DOFs (zeros; no posture seen)."""
-    m, n = n_rows, n_dofs
-    return RangeWork(np.zeros((m, n)), np.zeros(m), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, n)),
-                     np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros(n), np.zeros(n), np.zeros((n, n)),
-                     np.zeros((n, n)), np.full((n, n), np.nan), np.array([np.nan, UNSEEN, 0.0, 0.0, 0.0]))
-
-
-@njit(cache=True, _nrt=False, fastmath=SUMS)
-def _forward(F, a, b, x):
-    """``x[a:b] = F[a:b, a:b]^-1 x[a:b]`` (lower triangular)."""
-    for i in range(a, b):
-        x[i] = (x[i] - dot_sum(F[i, a:i], x[a:i])) / F[i, i]
-
-
-@njit(cache=True, _nrt=False, fastmath=SUMS)
-def _backward(F, a, b, x):
-    """``x[a:b] = F[a:b, a:b]^-T x[a:b]``."""
-    for i in range(b - 1, a - 1, -1):
-        s = x[i]
-        for j in range(i + 1, b):
-            s -= F[j, i] * x[j]
-        x[i] = s / F[i, i]
-
-
-@njit(cache=True, _nrt=False, fastmath=SUMS)
-def _factor(A, a, b, least):
-    """``A[a:b, a:b]`` (lower triangle read) replaced by its Cholesky factor; False if a pivot is not above
-    ``least``."""
-    for j in range(a, b):
-        d = A[j, j] - dot_sum(A[j, a:j], A[j, a:j])
-        if not d > least * least:
-            return False
-        d = math.sqrt(d)
-        A[j, j] = d
-        for i in range(j + 1, b):
-            A[i, j] = (A[i, j] - dot_sum(A[i, a:j], A[j, a:j])) / d
-    return True
+    m, n, h = n_rows, n_dofs, n_rows + LOCKS
+    return RangeWork(np.zeros((h, n)), np.zeros(m), np.zeros((m, m)), np.zeros((m, m)), np.zeros((h, n)),
+                     np.zeros((h, h)), np.zeros(h), np.zeros(m), np.zeros(n), np.zeros(n), np.zeros((n, n)),
+                     np.zeros((n, n)), np.full((n, n), np.nan), np.array([np.nan, UNSEEN, 0.0, 0.0, 0.0]),
+                     np.zeros(LOCKS, dtype=np.int64))
 
 
 @njit(cache=True, _nrt=False, fastmath=SUMS)
@@ -162,14 +135,6 @@ def _weigh(rows, errors, weights, start, stop, C, ce, at):
     return out, math.sqrt(scale)
 
 
-@njit(cache=True, _nrt=False, inline="always")
-def _subtract_rows(lam, X, m, out):
-    """``out -= lam[:m] @ X[:m]`` (``lam`` negated in place)."""
-    for i in range(m):
-        lam[i] = -lam[i]
-    combine_rows(lam[:m], X[:m], out)
-
-
 @njit(cache=True, _nrt=False, fastmath=SUMS)
 def _level(rw, a, b, dq, damping, pivot_least):
     """Level rows ``a:b`` of ``rw.C`` below rows ``0:a``: its block of the Gram factor ``rw.F`` and its damped step
@@ -189,12 +154,12 @@ def _level(rw, a, b, dq, damping, pivot_least):
             F[i, j] = s
             D[i, j] = s
         D[i, i] += damping
-    if not _factor(F, a, b, pivot_least) or not _factor(D, a, b, 0.0):
+    if not factor(F, a, b, pivot_least) or not factor(D, a, b, 0.0):
         return False
     for i in range(a, b):
         y[i] = rw.ce[i] - dot_sum(C[i], dq)
-    _forward(D, a, b, y)
-    _backward(D, a, b, y)
+    forward(D, a, b, y)
+    backward(D, a, b, y)
     # u = C_l^T y - C_a^T K_a^-1 K_al y; K_al y = F_a (F_la^T y): t = F_la^T y, then F_a^-T t
     t = rw.t
     for j in range(a):
@@ -202,11 +167,11 @@ def _level(rw, a, b, dq, damping, pivot_least):
         for i in range(a, b):
             s += F[i, j] * y[i]
         t[j] = s
-    _backward(F, 0, a, t)
+    backward(F, 0, a, t)
     step = rw.step
     step[:] = 0.0
     combine_rows(y[a:b], C[a:b], step)
-    _subtract_rows(t, C, a, step)
+    subtract_rows(t, C, a, step)
     return True
 
 
@@ -243,128 +208,6 @@ def _take(dq, step, lo, hi, box_tol, box_rel_tol):
 
 
 @njit(cache=True, _nrt=False)
-def _posture_kind(rw, P, damping, invert):
-    """:data:`DIAGONAL` or :data:`FULL` (``rw.Hinv`` then ``(P + damping I)^-1``) for the posture's normal matrix
-    ``P`` (n, n), or :data:`UNSEEN` where ``P`` or the damping differ from the last call's (kept for the next), or a
-    full ``P`` is not inverted (``invert`` False and not inverted yet; or ``P + damping I`` not positive definite):
-    the QR path steps."""
-    n = P.shape[0]
-    st, key = rw.state, rw.key
-    a, b = key.view(np.int64), P.view(np.int64)
-    same = st[S_DAMPING] == damping
-    for i in range(n):
-        for j in range(n):
-            if a[i, j] != b[i, j]:
-                same = False
-                key[i, j] = P[i, j]
-    if not same:
-        st[S_DAMPING], st[S_KIND], st[S_INVERTED] = damping, UNSEEN, 0.0
-        return UNSEEN
-    if st[S_KIND] == UNSEEN:
-        st[S_KIND] = DIAGONAL if is_diagonal(P) else FULL
-    if st[S_KIND] == FULL and st[S_INVERTED] == 0.0:
-        if not (invert and _invert(rw, P, damping)):
-            return UNSEEN
-        st[S_INVERTED] = 1.0
-    return st[S_KIND]
-
-
-@njit(cache=True, _nrt=False, fastmath=SUMS)
-def _invert(rw, P, damping):
-    """``rw.Hinv = (P + damping I)^-1`` (n, n), by its Cholesky factor (in ``rw.Hf``); False if not positive
-    definite."""
-    n = P.shape[0]
-    Hf, Hinv = rw.Hf, rw.Hinv
-    for i in range(n):
-        for j in range(i + 1):
-            Hf[i, j] = P[i, j]
-        Hf[i, i] += damping
-    if not _factor(Hf, 0, n, 0.0):
-        return False
-    for c in range(n):
-        col = Hinv[c]  # H^-1 e_c, stored as a row (H^-1 is symmetric)
-        col[:] = 0.0
-        col[c] = 1.0
-        _forward(Hf, 0, n, col)
-        _backward(Hf, 0, n, col)
-    return True
-
-
-@njit(cache=True, _nrt=False, fastmath=SUMS)
-def _posture_rhs(rows, errors, start, stop, P, dq, hb):
-    """``hb = L^T e - P dq`` (n,): the posture level's right-hand side (its rows ``start:stop`` are ``L``, weights
-    1)."""
-    n = dq.shape[0]
-    for d in range(n):
-        hb[d] = -dot_sum(P[d], dq)
-    combine_rows(errors[start:stop], rows[start:stop], hb)
-
-
-@njit(cache=True, _nrt=False, fastmath=SUMS)
-def _posture_full(rw, m, rows, errors, start, stop, P, dq):
-    """The posture's step with the target rows ``rw.C[:m]`` held, ``rw.Hinv`` its damped inverse, into
-    ``rw.step``; False if ``C H^-1 C^T`` is not positive definite."""
-    n = dq.shape[0]
-    Y, G, hb, lam, Hinv, C = rw.Y, rw.G, rw.hb, rw.y, rw.Hinv, rw.C
-    step = rw.step
-    _posture_rhs(rows, errors, start, stop, P, dq, step)
-    hb[:] = 0.0
-    combine_rows(step, Hinv, hb)  # hb = H^-1 b, by rows of the symmetric H^-1
-    for i in range(m):  # Y = C H^-1, G = C H^-1 C^T (lower), lam = C H^-1 b
-        yi = Y[i]
-        yi[:] = 0.0
-        combine_rows(C[i], Hinv, yi)
-        for j in range(i + 1):
-            G[i, j] = dot_sum(Y[i], C[j])
-        lam[i] = dot_sum(C[i], hb)
-    if not _factor(G, 0, m, 0.0):
-        return False
-    _forward(G, 0, m, lam)
-    _backward(G, 0, m, lam)
-    for d in range(n):
-        step[d] = hb[d]
-    _subtract_rows(lam, Y, m, step)
-    return True
-
-
-@njit(cache=True, _nrt=False, fastmath=SUMS)
-def _posture_diagonal(rw, m, rows, errors, start, stop, P, damping, dq):
-    """The posture's step for a diagonal ``P`` (``H^-1`` a scaling) with the target rows ``rw.C[:m]`` held, into
-    ``rw.step``; False if ``C H^-1 C^T`` is not positive definite. A uniform one's ``C H^-1 C^T`` is the Gram
-    matrix's, already factored."""
-    n = dq.shape[0]
-    Y, G, hb, lam, C = rw.Y, rw.G, rw.hb, rw.y, rw.C
-    h = rw.Hf[0]  # H^-1's diagonal (n,)
-    uniform = True
-    for d in range(n):
-        h[d] = 1.0 / (P[d, d] + damping)
-        uniform = uniform and P[d, d] == P[0, 0]
-    _posture_rhs(rows, errors, start, stop, P, dq, hb)
-    for d in range(n):
-        hb[d] *= h[d]
-    for i in range(m):
-        lam[i] = dot_sum(C[i], hb)
-    # uniform: C H^-1 C^T = K / (P_00 + damping), lam = K^-1 C H^-1 b (H^-1 b in hb), the Gram factor's and C's
-    F, CH = (rw.F, C) if uniform else (G, Y)
-    if not uniform:
-        for i in range(m):
-            yi, ci = Y[i], C[i]
-            for d in range(n):
-                yi[d] = ci[d] * h[d]
-            for j in range(i + 1):
-                G[i, j] = dot_sum(Y[i], C[j])
-        if not _factor(G, 0, m, 0.0):
-            return False
-    _forward(F, 0, m, lam)
-    _backward(F, 0, m, lam)
-    step = rw.step
-    for d in range(n):
-        step[d] = hb[d]
-    _subtract_rows(lam, CH, m, step)
-    return True
-
-
-@njit(cache=True, _nrt=False)
 def range_space_step(rw, rows, errors, weights, starts, dampings, lo, hi, rank_tol, box_tol, box_rel_tol, normal,
                      bound, dq, below):
     """:func:`gsik.kernels.posture_level.prioritized_step_posture_in`'s step before its share bound (the same
@@ -375,8 +218,8 @@ def range_space_step(rw, rows, errors, weights, starts, dampings, lo, hi, rank_t
     posture = dampings.shape[0] - 1
     # A full posture's share is bounded in a drag's steps, never in a solve()'s settle, whose steps swap the targets'
     # curvature into its level (a matrix a step): inverted only for the former.
-    kind = _posture_kind(rw, normal, dampings[posture], bound > 0.0)
-    if kind == UNSEEN or starts[posture] > rw.C.shape[0]:
+    kind = range_posture.posture_kind(rw, normal, dampings[posture], bound > 0.0)
+    if kind == UNSEEN or starts[posture] > rw.F.shape[0]:
         return False
     dq[:] = 0.0
     m = 0
@@ -398,11 +241,18 @@ def range_space_step(rw, rows, errors, weights, starts, dampings, lo, hi, rank_t
     copy_into(below, dq)
     priority._into_box(dq, lo, hi, box_tol)
     start, stop = starts[posture], starts[posture + 1]
+    rp = range_posture
     if kind == DIAGONAL:
-        done = _posture_diagonal(rw, m, rows, errors, start, stop, normal, dampings[posture], dq)
+        done = rp.posture_diagonal(rw, m, rows, errors, start, stop, normal, dampings[posture], dq)
     else:
-        done = _posture_full(rw, m, rows, errors, start, stop, normal, dq)
-    if not (done and _take(dq, rw.step, lo, hi, box_tol, box_rel_tol)):
+        done = rp.posture_full(rw, m, rows, errors, start, stop, normal, dq)
+    if not done:
+        return False
+    # a step that meets the box as the QR's active set takes it: DOFs that block it locked (a locking not well inside
+    # full rank, or more than LOCKS: the QR's)
+    if not (_take(dq, rw.step, lo, hi, box_tol, box_rel_tol)
+            or rp.posture_box(rw, kind, m, rows, errors, start, stop, normal, dq, lo, hi, box_tol, box_rel_tol,
+                              RANK_MARGIN * rank_tol)):
         return False
     priority.clip(dq, lo, hi)
     return True

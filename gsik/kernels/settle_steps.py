@@ -4,7 +4,7 @@ A drag's warm :meth:`gsik.Solver.solve` with a posture makes two to ten prioriti
 Python calls around its compiled step (:meth:`gsik.control.Controller.step`: held, committed, creeping; then
 :meth:`gsik.stall.PostureSettle.settled`): ~15 µs a step. :func:`settle_steps` runs that loop
 (``Attempts._control_steps``) bit for bit: the same compiled step
-(:func:`gsik.kernels.step_inputs.control_step`), the same judgement of it as ``Controller._committed``, and the same
+(:func:`gsik.kernels.step_inputs.control_step_in`), the same judgement of it as ``Controller._committed``, and the same
 settle test (:func:`gsik.kernels.settle.settled`). The Python around it (:mod:`gsik.control_settle`) keeps the
 controller's held-pose bookkeeping.
 """
@@ -49,13 +49,13 @@ def settle_steps(s, W, q, R, p, lam, iterations, rest, state, gain, last_move, m
             before[d] = q[d]
         if rest:
             lam[0], rest = s.base, False
-        end = step_inputs.control_step(s, W, q, R, p, lam, lam[0])
+        end = step_inputs.control_step_in(s, W, q, R, p, lam, lam[0])
         if end[0] != priority.OK:
             curvature.end(cur, s.posture.normal)
             return NOT_FINITE, steps, False, False, False, 0.0, False, 0.0, False, False
         committed = end[1] > 0.0
         converged, cost, lagging = end[3] > 0.0, end[4], end[5] > 0.0
-        accepted, held, step_norm = step_inputs.judged(s, end, True)  # a posture is on
+        accepted, held, step_norm = step_inputs.judged_in(s, end, True)  # a posture is on
         if learning:
             curvature.learn(cur, s.task_model, s.tasks.packed_row, s.posture.reference, q, R, p, s.posture.normal,
                             converged)

@@ -27,6 +27,8 @@ if AVAILABLE:
     from numba.core import types
     from numba.experimental import structref
 
+    from gsik.kernels.borrow import borrow
+
     @structref.register
     class StepInputsType(types.StructRef):
         """The numba type of a :class:`StepInputs`: its fields' types as given (no literals)."""
@@ -48,27 +50,40 @@ if AVAILABLE:
 
     @njit(cache=True)
     def control_step(inputs, W, q, R, p, lam, damping):
+        """:func:`control_step_in` for a caller that holds references (Python, a kernel compiled with NRT)."""
+        return control_step_in(inputs, W, q, R, p, lam, damping)
+
+    @njit(cache=True, _nrt=False)
+    def control_step_in(inputs, W, q, R, p, lam, damping):
         """:func:`gsik.kernels.fallback.control_step` (the full step and, when refused, its fallback) from ``q``
         (n,) [rad] at ``W`` (4, 4) (frames ``R``, ``p``; ``lam`` (1,) the adaptive damping, ``damping`` this
-        step's) with a controller's fixed ``inputs`` (:func:`make_step_inputs`). Returns
-        :func:`gsik.kernels.fallback.step_end`: what the step's statistics need."""
+        step's) with a controller's fixed ``inputs`` (:func:`make_step_inputs`), its fields read without reference
+        counting (:func:`gsik.kernels.borrow.borrow`). Returns :func:`gsik.kernels.fallback.step_end`: what the
+        step's statistics need."""
         s = inputs
-        fb.control_step(s.task_model, s.fk, s.tasks, s.posture, s.root, W, s.lower, s.upper, s.max_step, q, R, p,
-                        lam, damping, s.base, s.near, s.tols, s.floors, s.rule, s.restoring, s.stall_tolerance,
-                        s.cache, s.window, s.wk)
-        return fb.step_end(s.cache)
+        fb.control_step(borrow(s, "task_model"), borrow(s, "fk"), borrow(s, "tasks"), borrow(s, "posture"),
+                        borrow(s, "root"), W, borrow(s, "lower"), borrow(s, "upper"), borrow(s, "max_step"), q, R, p,
+                        lam, damping, borrow(s, "base"), borrow(s, "near"), borrow(s, "tols"), borrow(s, "floors"),
+                        borrow(s, "rule"), borrow(s, "restoring"), borrow(s, "stall_tolerance"), borrow(s, "cache"),
+                        borrow(s, "window"), borrow(s, "wk"))
+        return fb.step_end(borrow(s, "cache"))
 
     @njit(cache=True)
     def judged(inputs, end, posture_on):
+        """:func:`judged_in` for a caller that holds references."""
+        return judged_in(inputs, end, posture_on)
+
+    @njit(cache=True, _nrt=False)
+    def judged_in(inputs, end, posture_on):
         """``(accepted, held, step_norm)`` of a step that ended in ``end`` (what :func:`control_step` returns), as
         ``gsik.control.Controller`` judges it: a committed step holds when its norm [rad] is at most the stall
         tolerance or the stall window says it creeps (asked here when the kernel left it to that norm); a refused
         one as the kernel said."""
         if end[1] > 0.0:  # committed: gsik.control.Controller._committed
-            step_norm, crept = end[6], end[2]
+            step_norm, crept, stall = end[6], end[2], borrow(inputs, "stall_tolerance")
             if crept < 0.0:
-                s = inputs
-                crept = 1.0 if not step_norm <= s.stall_tolerance and creeps(s.window, s.cache.met, posture_on,
-                                                                               s.cache.costs) else 0.0
-            return True, step_norm <= inputs.stall_tolerance or crept > 0.0, step_norm
+                cache = borrow(inputs, "cache")
+                crept = 1.0 if not step_norm <= stall and creeps(borrow(inputs, "window"), cache.met, posture_on,
+                                                                 cache.costs) else 0.0
+            return True, step_norm <= stall or crept > 0.0, step_norm
         return False, end[2] > 0.0, 0.0

@@ -15,6 +15,8 @@ Without numba (or with ``NUMBA_DISABLE_JIT``) :func:`combine_rows` is that loop 
 
 from __future__ import annotations
 
+from gsik._jit import njit
+
 #: Lanes per register (doubles in 512 bits; LLVM splits them where registers are narrower) and registers per block.
 LANES, REGISTERS = 8, 4
 
@@ -116,3 +118,11 @@ if intrinsic is not None:
         if _readable(w, X, out):
             return lambda w, X, out: _combine_rows(w, X, out)
         return None
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def subtract_rows(lam, X, m, out):
+    """``out -= lam[:m] @ X[:m]`` (``lam`` negated in place)."""
+    for i in range(m):
+        lam[i] = -lam[i]
+    combine_rows(lam[:m], X[:m], out)
