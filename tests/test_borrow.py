@@ -1,6 +1,11 @@
 """A structure's field read without reference counting (gsik.kernels.borrow): the field itself, in kernels compiled
 with and without NRT, and the references balanced."""
 
+import json
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -116,3 +121,34 @@ def test_a_name_it_does_not_hold_or_not_a_literal_is_refused_when_compiling():
         unknown(pair)
     with pytest.raises(TypingError):
         not_literal(pair, "rows")
+
+
+_PLAIN_STEP = """
+import json
+import os
+import gsik
+from collections import namedtuple
+from gsik.kernels.borrow import borrow
+s = gsik.Solver(gsik.load_skeleton("biped"))
+t = {n: gsik.Target.from_transform(T) for n, T in s.effector_poses().items()}
+t["left_hand"] = t["left_hand"].replace(position=t["left_hand"].position + [0.0, 0.05, 0.02])
+for _ in range(3):
+    s.step(t)
+python = os.environ.get("NUMBA_DISABLE_JIT") == "1"  # compiled, borrow is an intrinsic: not callable from Python
+field = borrow(namedtuple("Pair", "rows")(7.0), "rows") if python else None
+print(json.dumps({"field": field, "q": s.q.tolist()}))
+"""
+
+
+def test_without_the_compiler_it_is_the_attribute_and_the_plain_step_the_same():
+    """``NUMBA_DISABLE_JIT``: the kernels run as Python, ``borrow`` is ``getattr``, and the plain step (its fields read
+    through it) gives the compiled step's angles."""
+    runs = []
+    for extra in ({"NUMBA_DISABLE_JIT": "1"}, {}):
+        env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")} | extra
+        out = subprocess.run([sys.executable, "-c", _PLAIN_STEP], env=env, capture_output=True, text=True, check=False)
+        assert out.returncode == 0, out.stderr[-2000:]
+        runs.append(json.loads(out.stdout.splitlines()[-1]))
+    python, compiled = runs
+    assert python["field"] == 7.0
+    np.testing.assert_allclose(python["q"], compiled["q"], atol=1e-9)

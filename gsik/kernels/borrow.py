@@ -17,7 +17,7 @@ from __future__ import annotations
 
 try:
     from llvmlite import ir
-    from numba.core import cgutils, types
+    from numba.core import cgutils, config, types
     from numba.extending import intrinsic
 except ImportError:  # pragma: no cover - exercised only without numba
     intrinsic = None
@@ -31,7 +31,13 @@ def _data_pointer(context, builder, meminfo):
     return builder.load(cgutils.gep(builder, builder.bitcast(meminfo, layout.as_pointer()), 0, 3))
 
 
-if intrinsic is not None:
+if intrinsic is None or config.DISABLE_JIT:  # the kernels run as Python: a field is an attribute
+
+    def borrow(struct, name):
+        """``getattr(struct, name)``: what the compiled :func:`borrow` reads, for kernels run as Python."""
+        return getattr(struct, name)
+
+else:
 
     @intrinsic
     def borrow(typingctx, struct, name):

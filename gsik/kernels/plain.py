@@ -15,6 +15,7 @@ from typing import NamedTuple
 
 from gsik._jit import njit
 from gsik.kernels import CONVERGED, O_COST, O_FINITE, O_ITERATIONS, O_RESIDUAL, O_STATUS, O_STEP_NORM, O_SWEEPS
+from gsik.kernels.borrow import borrow
 from gsik.kernels.buffers import views
 from gsik.kernels.solve import solve
 from gsik.kernels.step import step_with
@@ -68,8 +69,17 @@ def make_plain_inputs(settings, solve_settings, floats, ints, sizes):
 @njit(cache=True)
 def step_plain(s):
     """:func:`gsik.kernels.step.step` on ``s`` (a :class:`PlainInputs`); returns its :data:`PLAIN_STATS`."""
-    finite = step_with(s.model, s.settings, s.targets, s.root, s.W, s.q, s.ws, s.sc)
-    st = s.ws.stats
+    return _step_plain(s)
+
+
+@njit(cache=True, _nrt=False)
+def _step_plain(s):
+    """:func:`step_plain`, the fields of ``s`` read without reference counting (:func:`gsik.kernels.borrow.borrow`:
+    ~80 atomic reference counts a call fewer)."""
+    ws = borrow(s, "ws")
+    finite = step_with(borrow(s, "model"), borrow(s, "settings"), borrow(s, "targets"), borrow(s, "root"),
+                       borrow(s, "W"), borrow(s, "q"), ws, borrow(s, "sc"))
+    st = ws.stats
     return finite, int(st[O_STATUS]), int(st[O_ITERATIONS]), int(st[O_SWEEPS]), st[O_RESIDUAL], st[O_STEP_NORM]
 
 
