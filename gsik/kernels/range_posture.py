@@ -189,15 +189,16 @@ def _lock(rw, kind, held, d, least):
     C, Y, G = rw.C, rw.Y, rw.G
     C[held] = 0.0
     C[held, d] = 1.0
-    yl, h = Y[held], rw.Hinv[d]  # H^-1 e_d: a row of the symmetric H^-1, or the diagonal's entry
-    for c in range(yl.shape[0]):
-        yl[c] = h[c] if kind == FULL else 0.0
-    if kind != FULL:
+    yl = Y[held]  # H^-1 e_d: a row of the symmetric H^-1, or the diagonal's entry
+    if kind == FULL:
+        for c in range(yl.shape[0]):
+            yl[c] = rw.Hinv[d, c]
+    else:
+        yl[:] = 0.0
         yl[d] = rw.Hf[0, d]
     for j in range(held + 1):
         G[held, j] = dot_sum(Y[held], C[j])
-    for j in range(held):
-        G[held, j] = (G[held, j] - dot_sum(G[held, :j], G[j, :j])) / G[j, j]
+    forward(G, 0, held, G[held])  # the factor's new row: its block above solved against the row
     s = G[held, held] - dot_sum(G[held, :held], G[held, :held])
     if not s > least * least * Y[held, d]:
         return False

@@ -68,11 +68,6 @@ if AVAILABLE:
                         borrow(s, "window"), borrow(s, "wk"))
         return fb.step_end(borrow(s, "cache"))
 
-    @njit(cache=True)
-    def judged(inputs, end, posture_on):
-        """:func:`judged_in` for a caller that holds references."""
-        return judged_in(inputs, end, posture_on)
-
     @njit(cache=True, _nrt=False)
     def judged_in(inputs, end, posture_on):
         """``(accepted, held, step_norm)`` of a step that ended in ``end`` (what :func:`control_step` returns), as
